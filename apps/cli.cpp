@@ -1,0 +1,192 @@
+// Command-line parsing and progress reporting for dpts-par.
+#include "apps/cli.hpp"
+
+#include <unistd.h>
+
+#include <charconv>
+#include <cstdio>
+#include <iostream>
+
+#include "core/errors.hpp"
+
+namespace dpts::cli {
+namespace {
+
+template <typename T>
+T parse_number(const std::string& flag, const std::string& text, T min, const char* expected) {
+  T value{};
+  const auto res = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (res.ec != std::errc() || res.ptr != text.data() + text.size() || value < min) {
+    throw UsageError(flag + " " + text + ": expected " + expected);
+  }
+  return value;
+}
+
+}  // namespace
+
+std::string par_help() {
+  return R"(usage: dpts-par [options] INPUT OUTPUT
+
+Simplifies a DEM (band 1 of any raster GDAL reads) into a TIN that preserves surface
+(geodesic) distances, by Delaunay vertex elimination, and writes it as PLY.
+
+  --algo vp|pld        importance: vp = volume between the surfaces before and after a
+                       removal (default); pld = preserve local distances
+  --keep P%            keep P percent of the input vertices, 0 < P <= 100 (default 10%)
+  --vertices N         keep N vertices instead (N >= 3)
+  --vp-volume exact|mc VP volume: exact integral over the hole (default) or the paper's
+                       Monte Carlo estimate
+  --vp-samples N       Monte Carlo points per VP evaluation (default 100)
+  --seed S             seed for the random parts (default 1)
+  --t-srs CRS          output CRS (projected); default: the DEM's own CRS if projected,
+                       the UTM zone of its centre if geographic
+  --threads N          worker threads (default: all cores)
+  --tile-mb M          memory budget of one tile in MB (default 256; accepted now, the
+                       tiled out-of-core engine is not built yet: the DEM is read whole)
+  --ascii              write ASCII PLY (default: binary little-endian)
+  --config KEY VALUE   set a GDAL configuration option
+  --quiet              no progress or summary on stderr (warnings still show)
+  --help, --version
+
+Every valid cell centre is a vertex; no-data and NaN cells are not, and no face covers a
+void or leaves the valid data. Output: vertex x y z (double, output CRS), faces
+counter-clockwise seen from above, the CRS as WKT in a header comment. The output file
+appears only when complete. Exit status: 0 ok, 1 failure, 2 bad usage.
+)";
+}
+
+ParOptions parse_par(const std::vector<std::string>& args) {
+  ParOptions o;
+  std::vector<std::string> positional;
+  bool keep_seen = false, vertices_seen = false;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    std::string arg = args[i];
+    std::string value;
+    bool has_inline = false;
+    if (arg.rfind("--", 0) == 0) {
+      const auto eq = arg.find('=');
+      if (eq != std::string::npos) {
+        value = arg.substr(eq + 1);
+        arg = arg.substr(0, eq);
+        has_inline = true;
+      }
+    }
+    auto need = [&](const std::string& flag) {
+      if (has_inline) return value;
+      if (i + 1 >= args.size()) throw UsageError(flag + ": missing value");
+      return args[++i];
+    };
+    if (arg == "--help" || arg == "-h") {
+      o.help = true;
+    } else if (arg == "--version") {
+      o.version = true;
+    } else if (arg == "--algo") {
+      const std::string v = need(arg);
+      if (v == "vp") {
+        o.elimination.importance = core::Importance::vp;
+      } else if (v == "pld") {
+        o.elimination.importance = core::Importance::pld;
+      } else {
+        throw UsageError("--algo " + v + ": expected vp or pld");
+      }
+    } else if (arg == "--keep") {
+      std::string v = need(arg);
+      o.keep_text = v;
+      if (!v.empty() && v.back() == '%') v.pop_back();
+      double p = 0;
+      const auto res = std::from_chars(v.data(), v.data() + v.size(), p);
+      if (v.empty() || res.ec != std::errc() || res.ptr != v.data() + v.size() || !(p > 0) || p > 100) {
+        throw UsageError("--keep " + o.keep_text + ": expected a percentage with 0 < P <= 100");
+      }
+      o.keep.percent = p;
+      keep_seen = true;
+    } else if (arg == "--vertices") {
+      const std::string v = need(arg);
+      o.keep.vertices = parse_number<std::size_t>(arg, v, 3, "an integer >= 3");
+      o.keep_text = v + " vertices";
+      vertices_seen = true;
+    } else if (arg == "--vp-volume") {
+      const std::string v = need(arg);
+      if (v == "exact") {
+        o.elimination.vp_volume = core::VolumeMethod::exact;
+      } else if (v == "mc") {
+        o.elimination.vp_volume = core::VolumeMethod::monte_carlo;
+      } else {
+        throw UsageError("--vp-volume " + v + ": expected exact or mc");
+      }
+    } else if (arg == "--vp-samples") {
+      o.elimination.vp_samples = parse_number<int>(arg, need(arg), 1, "an integer >= 1");
+    } else if (arg == "--seed") {
+      o.elimination.seed = parse_number<std::uint64_t>(arg, need(arg), 0, "a non-negative integer");
+    } else if (arg == "--threads") {
+      o.threads = parse_number<int>(arg, need(arg), 1, "an integer >= 1");
+    } else if (arg == "--tile-mb") {
+      o.tile_mb = parse_number<int>(arg, need(arg), 1, "an integer >= 1");
+    } else if (arg == "--t-srs") {
+      o.t_srs = need(arg);
+      if (o.t_srs.empty()) throw UsageError("--t-srs: expected a CRS");
+    } else if (arg == "--ascii") {
+      o.ascii = true;
+    } else if (arg == "--quiet" || arg == "-q") {
+      o.quiet = true;
+    } else if (arg == "--config") {
+      if (i + 2 >= args.size()) throw UsageError("--config: expected KEY VALUE");
+      o.config.emplace_back(args[i + 1], args[i + 2]);
+      i += 2;
+    } else if (arg.size() > 1 && arg[0] == '-') {
+      throw UsageError(arg + ": unknown option");
+    } else {
+      positional.push_back(arg);
+    }
+  }
+  if (o.help || o.version) return o;
+  if (keep_seen && vertices_seen) throw UsageError("--keep and --vertices: give one, not both");
+  if (!keep_seen && !vertices_seen) o.keep.percent = 10.0;
+  if (positional.size() != 2) {
+    throw UsageError(positional.size() < 2 ? "expected INPUT and OUTPUT"
+                                           : "unexpected argument '" + positional[2] + "'");
+  }
+  o.input = positional[0];
+  o.output = positional[1];
+  return o;
+}
+
+ProgressPrinter::ProgressPrinter(std::string prog, bool quiet, const volatile int* cancel_flag)
+    : prog_(std::move(prog)),
+      quiet_(quiet),
+      tty_(::isatty(2) != 0),
+      cancel_(cancel_flag),
+      start_(std::chrono::steady_clock::now()) {}
+
+bool ProgressPrinter::operator()(double fraction, std::string_view stage) {
+  if (cancel_ && *cancel_) return false;
+  if (quiet_) return true;
+  if (stage != stage_) {
+    stage_ = std::string(stage);
+    last_decile_ = -1;
+    last_percent_ = -1;
+  }
+  const double elapsed =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  if (elapsed < 1.0) return true;
+  const int percent = static_cast<int>(fraction * 100.0 + 1e-9);
+  if (tty_) {
+    if (percent != last_percent_) {
+      std::fprintf(stderr, "\r%s: %-11s %3d%%", prog_.c_str(), stage_.c_str(), percent);
+      std::fflush(stderr);
+      line_open_ = true;
+      last_percent_ = percent;
+    }
+  } else if (percent / 10 != last_decile_) {
+    last_decile_ = percent / 10;
+    std::fprintf(stderr, "%s: %s %d%%\n", prog_.c_str(), stage_.c_str(), last_decile_ * 10);
+  }
+  return true;
+}
+
+void ProgressPrinter::finish() {
+  if (line_open_) std::fputc('\n', stderr);
+  line_open_ = false;
+}
+
+}  // namespace dpts::cli

@@ -1,0 +1,55 @@
+// Command-line parsing and progress reporting shared by the dpts executables.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "core/elimination.hpp"
+#include "parallel/simplify.hpp"
+
+namespace dpts::cli {
+
+struct ParOptions {
+  std::string input, output;
+  core::EliminationOptions elimination;
+  par::KeepTarget keep;
+  std::string keep_text = "10%";
+  int threads = 0;  // 0: all cores
+  int tile_mb = 256;
+  std::string t_srs;
+  bool ascii = false;
+  bool quiet = false;
+  bool help = false;
+  bool version = false;
+  std::vector<std::pair<std::string, std::string>> config;  // GDAL config options
+};
+
+// Parses dpts-par's arguments. Throws UsageError with a one-line message naming the flag.
+ParOptions parse_par(const std::vector<std::string>& args);
+std::string par_help();
+
+// Prints "<prog>: <stage> NN%" to stderr once a run has lasted a second: rewriting one line
+// on a terminal, one line per 10 % otherwise. Returns false once a cancel was requested.
+class ProgressPrinter {
+ public:
+  ProgressPrinter(std::string prog, bool quiet, const volatile int* cancel_flag);
+  bool operator()(double fraction, std::string_view stage);
+  void finish();  // ends a pending terminal line
+
+ private:
+  std::string prog_;
+  bool quiet_;
+  bool tty_;
+  const volatile int* cancel_;
+  std::chrono::steady_clock::time_point start_;
+  std::string stage_;
+  int last_decile_ = -1;
+  int last_percent_ = -1;
+  bool line_open_ = false;
+};
+
+}  // namespace dpts::cli

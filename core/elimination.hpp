@@ -1,0 +1,78 @@
+// The elimination method (Ben-Moshe et al., section 3.1) on a Delaunay TIN of a DEM:
+// repeatedly remove the least important vertex by Delaunay removal and update the
+// importance of the vertices whose star changed. Importance is VP (volume between the
+// surfaces before and after the removal) or PLD (local distance preservation).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string_view>
+#include <vector>
+
+#include "core/grid.hpp"
+
+namespace dpts::core {
+
+enum class Importance { vp, pld };
+enum class VolumeMethod { exact, monte_carlo };
+
+struct EliminationOptions {
+  Importance importance = Importance::vp;
+  VolumeMethod vp_volume = VolumeMethod::exact;  // exact: no noise, and faster (see README)
+  int vp_samples = 100;                          // Monte Carlo points per VP evaluation
+  std::uint64_t seed = 1;                        // Monte Carlo seed
+};
+
+// A TIN over a DEM: vertices are cells (row-major indices, ascending), faces index into
+// `cells`, counter-clockwise seen from above, rotated to start at their smallest index and
+// sorted. Every face lies in the DEM's valid footprint (see footprint.hpp) and together they
+// cover it exactly once.
+struct Tin {
+  std::vector<std::uint32_t> cells;
+  std::vector<std::array<std::uint32_t, 3>> faces;
+};
+
+// Progress callback: fraction in [0, 1] of the current stage; return false to stop.
+using Progress = std::function<bool(double fraction, std::string_view stage)>;
+
+// Simplifies the Delaunay TIN of one DEM by vertex elimination.
+//
+// The grid must outlive the Eliminator. Outline rule: a vertex on the outline of the valid
+// footprint is removed only where the outline is straight through it (in grid space) and the
+// straight outline edge is Delaunay afterwards, so the footprint never changes; corners of the
+// DEM and of voids are never removed. Ties of importance are broken by cell index. The result
+// is the same whatever the order in which compute_importance() ranges run.
+class Eliminator {
+ public:
+  // Builds the Delaunay triangulation of the DEM's surface vertices (see footprint.hpp).
+  // Throws std::invalid_argument when the DEM has no footprint triangle.
+  Eliminator(const HeightGrid& grid, const GridFrame& frame, const EliminationOptions& options);
+  ~Eliminator();
+  Eliminator(const Eliminator&) = delete;
+  Eliminator& operator=(const Eliminator&) = delete;
+
+  // Number of surface vertices (the input vertex count) and of those still in the TIN.
+  std::size_t vertex_count() const;
+  std::size_t alive_count() const;
+
+  // Computes the initial importance of surface vertices [begin, end). Reads shared state and
+  // writes only those vertices' slots: safe to run concurrently on disjoint ranges.
+  void compute_importance(std::size_t begin, std::size_t end);
+
+  // Removes vertices, least important first, until `keep` remain or none can be removed
+  // without changing the footprint. Requires compute_importance() on all vertices first.
+  // Throws dpts::Cancelled when progress returns false.
+  void eliminate(std::size_t keep, const Progress& progress);
+
+  // The current TIN: faces inside the footprint only.
+  Tin tin() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace dpts::core

@@ -1,0 +1,119 @@
+// The valid footprint of a DEM (see footprint.hpp) and exact point-in-footprint tests.
+#include "core/footprint.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace dpts::core {
+namespace {
+
+// Valid corners of square (c, r) as a bit set: 1 = (c,r), 2 = (c+1,r), 4 = (c,r+1),
+// 8 = (c+1,r+1).
+int square_mask(const HeightGrid& g, int c, int r) {
+  return (g.is_valid(c, r) ? 1 : 0) | (g.is_valid(c + 1, r) ? 2 : 0) |
+         (g.is_valid(c, r + 1) ? 4 : 0) | (g.is_valid(c + 1, r + 1) ? 8 : 0);
+}
+
+int popcount4(int m) { return (m & 1) + ((m >> 1) & 1) + ((m >> 2) & 1) + ((m >> 3) & 1); }
+
+// Whether the corner bit `corner` of square (c, r) belongs to a part of F.
+bool square_uses_corner(const HeightGrid& g, int c, int r, int corner) {
+  if (c < 0 || r < 0 || c + 1 >= g.width || r + 1 >= g.height) return false;
+  const int mask = square_mask(g, c, r);
+  return popcount4(mask) >= 3 && (mask & corner) != 0;
+}
+
+std::int64_t floor_div3(std::int64_t s) { return s >= 0 ? s / 3 : -((-s + 2) / 3); }
+
+}  // namespace
+
+GridFrame GridFrame::from_jacobian(const double j[2][2]) {
+  const double det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+  if (!std::isfinite(det) || det == 0.0) {
+    throw std::invalid_argument("singular or non-finite cell geometry");
+  }
+  // note: scale by the length of a column step so a square grid maps to unit cells, then
+  // round every entry to a multiple of 2^-24 (exact products, see grid.hpp).
+  const double scale = std::hypot(j[0][0], j[1][0]);
+  GridFrame f;
+  for (int a = 0; a < 2; ++a) {
+    for (int b = 0; b < 2; ++b) {
+      f.m[a][b] = std::ldexp(std::nearbyint(std::ldexp(j[a][b] / scale, 24)), -24);
+    }
+  }
+  f.metres_per_unit = scale;
+  return f;
+}
+
+std::vector<std::uint32_t> surface_cells(const HeightGrid& grid) {
+  std::vector<std::uint32_t> cells;
+  for (int r = 0; r < grid.height; ++r) {
+    for (int c = 0; c < grid.width; ++c) {
+      if (!grid.is_valid(c, r)) continue;
+      // The cell is corner 8 of square (c-1,r-1), 4 of (c,r-1), 2 of (c-1,r), 1 of (c,r).
+      if (square_uses_corner(grid, c, r, 1) || square_uses_corner(grid, c - 1, r, 2) ||
+          square_uses_corner(grid, c, r - 1, 4) || square_uses_corner(grid, c - 1, r - 1, 8)) {
+        cells.push_back(static_cast<std::uint32_t>(grid.index(c, r)));
+      }
+    }
+  }
+  return cells;
+}
+
+namespace {
+
+// Whether the pushed point with thirds (a, b) inside a square of the given corner mask lies
+// in F (see footprint_contains_third).
+bool square_contains(int mask, int a, int b) {
+  switch (mask) {
+    case 15: return true;
+    case 14: return a + b >= 3;  // (c,r) missing: triangle of the other three, fx + fy > 1
+    case 7:  return a + b < 3;   // (c+1,r+1) missing: fx + fy < 1
+    case 13: return b > a;       // (c+1,r) missing: fy > fx (eps^2 < eps on the diagonal)
+    case 11: return a >= b;      // (c,r+1) missing: fx > fy
+    default: return false;
+  }
+}
+
+}  // namespace
+
+bool footprint_contains_third(const HeightGrid& grid, std::int64_t sum_col,
+                              std::int64_t sum_row) {
+  // note: with the push (+eps, +eps^2) a point on a grid line belongs to the square on its
+  // right (below), so the square is simply the floor of the coordinates.
+  const std::int64_t c = floor_div3(sum_col);
+  const std::int64_t r = floor_div3(sum_row);
+  if (c < 0 || r < 0 || c + 1 >= grid.width || r + 1 >= grid.height) return false;
+  return square_contains(square_mask(grid, static_cast<int>(c), static_cast<int>(r)),
+                         static_cast<int>(sum_col - 3 * c), static_cast<int>(sum_row - 3 * r));
+}
+
+FootprintIndex::FootprintIndex(const HeightGrid& grid)
+    : width_(grid.width), height_(grid.height), mask_(grid.cell_count(), 0) {
+  for (int r = 0; r + 1 < grid.height; ++r) {
+    for (int c = 0; c + 1 < grid.width; ++c) {
+      mask_[grid.index(c, r)] = static_cast<std::uint8_t>(square_mask(grid, c, r));
+    }
+  }
+}
+
+bool FootprintIndex::contains_third(std::int64_t sum_col, std::int64_t sum_row) const {
+  const std::int64_t c = floor_div3(sum_col);
+  const std::int64_t r = floor_div3(sum_row);
+  if (c < 0 || r < 0 || c + 1 >= width_ || r + 1 >= height_) return false;
+  return square_contains(mask_[static_cast<std::size_t>(r * width_ + c)],
+                         static_cast<int>(sum_col - 3 * c), static_cast<int>(sum_row - 3 * r));
+}
+
+double footprint_area_cells(const HeightGrid& grid) {
+  double area = 0.0;
+  for (int r = 0; r + 1 < grid.height; ++r) {
+    for (int c = 0; c + 1 < grid.width; ++c) {
+      const int n = popcount4(square_mask(grid, c, r));
+      area += n == 4 ? 1.0 : n == 3 ? 0.5 : 0.0;
+    }
+  }
+  return area;
+}
+
+}  // namespace dpts::core

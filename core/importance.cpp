@@ -1,0 +1,276 @@
+// VP and PLD importance of a vertex (Ben-Moshe et al., sections 4.1 and 4.2).
+#include "core/importance.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace dpts::core {
+namespace {
+
+struct P2 {
+  double x, y;
+};
+
+double cross(P2 o, P2 a, P2 b) { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); }
+
+// Plane z = a x + b y + c through three points (degenerate triangles give a flat plane at
+// their mean height; they have no area and contribute nothing anyway).
+struct Plane {
+  double a = 0, b = 0, c = 0;
+  double at(double x, double y) const { return a * x + b * y + c; }
+};
+
+Plane plane_through(const Point3& p, const Point3& q, const Point3& r) {
+  const double ux = q.x - p.x, uy = q.y - p.y, uz = q.z - p.z;
+  const double vx = r.x - p.x, vy = r.y - p.y, vz = r.z - p.z;
+  const double det = ux * vy - uy * vx;
+  Plane pl;
+  if (det == 0.0) {
+    pl.c = (p.z + q.z + r.z) / 3.0;
+    return pl;
+  }
+  pl.a = (uz * vy - uy * vz) / det;
+  pl.b = (ux * vz - uz * vx) / det;
+  pl.c = p.z - pl.a * p.x - pl.b * p.y;
+  return pl;
+}
+
+// Integral of |d| over a triangle where d is linear with corner values d0, d1, d2.
+double abs_integral(double area, double d0, double d1, double d2) {
+  const double mean = (d0 + d1 + d2) / 3.0;
+  // Sort so that the corner whose sign differs from the other two is d0 (if any).
+  const bool p0 = d0 > 0, p1 = d1 > 0, p2 = d2 > 0;
+  if (p0 == p1 && p1 == p2) return area * std::fabs(mean);
+  double lone, o1, o2;
+  if (p1 == p2) {
+    lone = d0, o1 = d1, o2 = d2;
+  } else if (p0 == p2) {
+    lone = d1, o1 = d0, o2 = d2;
+  } else {
+    lone = d2, o1 = d0, o2 = d1;
+  }
+  // The sub-triangle at the lone corner where d has the lone sign: its share of the area is
+  // t1 * t2, and d averages lone / 3 over it.
+  const double t1 = lone / (lone - o1);
+  const double t2 = lone / (lone - o2);
+  const double part = area * t1 * t2 * lone / 3.0;  // signed integral over that sub-triangle
+  // |d| integral = 2 * |part| - sign(lone) * (integral of d), written without branches on sign
+  return 2.0 * std::fabs(part) - (lone > 0 ? 1.0 : -1.0) * area * mean;
+}
+
+// A convex polygon of at most 5 vertices: a triangle clipped by two half-planes.
+struct SmallPoly {
+  P2 v[8];
+  int n = 0;
+};
+
+// Clips a convex polygon to the half-plane left of (or on) the directed line a -> b.
+void clip_left(const SmallPoly& in, P2 a, P2 b, SmallPoly& out) {
+  out.n = 0;
+  double sp = cross(a, b, in.v[0]);
+  for (int i = 0; i < in.n; ++i) {
+    const P2 p = in.v[i], q = in.v[i + 1 == in.n ? 0 : i + 1];
+    const double sq = cross(a, b, q);
+    if (sp >= 0) out.v[out.n++] = p;
+    if ((sp > 0 && sq < 0) || (sp < 0 && sq > 0)) {
+      const double t = sp / (sp - sq);
+      out.v[out.n++] = {p.x + t * (q.x - p.x), p.y + t * (q.y - p.y)};
+    }
+    sp = sq;
+  }
+}
+
+double triangle_area(P2 a, P2 b, P2 c) { return 0.5 * cross(a, b, c); }
+
+std::size_t fan_count(const Star& s) { return s.closed ? s.n : s.n - 1; }
+
+// splitmix64: a small, well-mixed counter-based generator (deterministic across platforms).
+struct SplitMix {
+  std::uint64_t state;
+  std::uint64_t next() {
+    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
+};
+
+// Height of the surface `tris` (over points pts) at (x, y), or NaN when outside all.
+double height_in(const std::vector<std::array<const Point3*, 3>>& tris, double x, double y) {
+  for (const auto& t : tris) {
+    const P2 a{t[0]->x, t[0]->y}, b{t[1]->x, t[1]->y}, c{t[2]->x, t[2]->y}, p{x, y};
+    const double area = cross(a, b, c);
+    if (area <= 0) continue;
+    const double l0 = cross(b, c, p), l1 = cross(c, a, p), l2 = cross(a, b, p);
+    if (l0 >= 0 && l1 >= 0 && l2 >= 0) {
+      return (l0 * t[0]->z + l1 * t[1]->z + l2 * t[2]->z) / area;
+    }
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
+}  // namespace
+
+double vp_volume_exact(const Star& s, const std::vector<LinkTriangle>& after) {
+  const P2 apex{s.apex.x, s.apex.y};
+  const std::size_t wedges = fan_count(s);
+  // A new triangle that does not contain the apex lies within the arc between its corners
+  // seen from the apex, which prunes most wedges. note: for link vertices in counter-
+  // clockwise order, the arc from link[i] to link[j] exceeds pi exactly when
+  // (link[i] - apex) x (link[j] - apex) < 0.
+  auto reflex = [&](int i, int j) {
+    const double ax = s.link[i].x - apex.x, ay = s.link[i].y - apex.y;
+    const double bx = s.link[j].x - apex.x, by = s.link[j].y - apex.y;
+    return ax * by - ay * bx < 0;
+  };
+  SmallPoly poly, tmp;
+  double volume = 0.0;
+  // Each new triangle is cut by the wedges of the fan (apex, link[i], link[i+1]); inside one
+  // piece both surfaces are planes, so their difference is linear and integrates exactly.
+  for (const LinkTriangle& t : after) {
+    const Point3 &p = s.link[t[0]], &q = s.link[t[1]], &r = s.link[t[2]];
+    const Plane after_plane = plane_through(p, q, r);
+    std::array<int, 3> k = t;
+    std::sort(k.begin(), k.end());
+    // Wedges [first, first + count) (mod n) may meet the triangle.
+    std::size_t first = 0, count = wedges;
+    if (!s.closed || reflex(k[2], k[0])) {
+      first = k[0], count = k[2] - k[0];
+    } else if (reflex(k[0], k[1])) {
+      first = k[1], count = s.n - (k[1] - k[0]);
+    } else if (reflex(k[1], k[2])) {
+      first = k[2], count = s.n - (k[2] - k[1]);
+    }
+    for (std::size_t w = 0; w < count; ++w) {
+      const std::size_t i = (first + w) % s.n;
+      const Point3& a = s.link[i];
+      const Point3& b = s.link[(i + 1) % s.n];
+      const P2 pa{a.x, a.y}, pb{b.x, b.y};
+      poly.n = 3;
+      poly.v[0] = {p.x, p.y}, poly.v[1] = {q.x, q.y}, poly.v[2] = {r.x, r.y};
+      // note: the new triangle lies inside the link polygon, so the wedge at the apex
+      // between the rays to a and b cuts out exactly its part in fan triangle (apex, a, b).
+      clip_left(poly, apex, pa, tmp);
+      if (tmp.n < 3) continue;
+      clip_left(tmp, pb, apex, poly);
+      if (poly.n < 3) continue;
+      const Plane before_plane = plane_through(s.apex, a, b);
+      auto diff = [&](P2 v) { return before_plane.at(v.x, v.y) - after_plane.at(v.x, v.y); };
+      const double d0 = diff(poly.v[0]);
+      double d_prev = diff(poly.v[1]);
+      for (int m = 2; m < poly.n; ++m) {
+        const double d_next = diff(poly.v[m]);
+        const double area = triangle_area(poly.v[0], poly.v[m - 1], poly.v[m]);
+        if (area > 0) volume += abs_integral(area, d0, d_prev, d_next);
+        d_prev = d_next;
+      }
+    }
+  }
+  return volume;
+}
+
+double vp_volume_monte_carlo(const Star& s, const std::vector<LinkTriangle>& after,
+                             int samples, std::uint64_t seed) {
+  std::vector<std::array<const Point3*, 3>> before_tris, after_tris;
+  for (std::size_t i = 0; i < fan_count(s); ++i) {
+    before_tris.push_back({&s.apex, &s.link[i], &s.link[(i + 1) % s.n]});
+  }
+  for (const LinkTriangle& t : after) after_tris.push_back({&s.link[t[0]], &s.link[t[1]], &s.link[t[2]]});
+  // The box B bounds both surfaces over the bounding rectangle of the affected vertices.
+  double x0 = s.apex.x, x1 = s.apex.x, y0 = s.apex.y, y1 = s.apex.y, z0 = s.apex.z, z1 = s.apex.z;
+  for (std::size_t i = 0; i < s.n; ++i) {
+    x0 = std::min(x0, s.link[i].x), x1 = std::max(x1, s.link[i].x);
+    y0 = std::min(y0, s.link[i].y), y1 = std::max(y1, s.link[i].y);
+    z0 = std::min(z0, s.link[i].z), z1 = std::max(z1, s.link[i].z);
+  }
+  const double box = (x1 - x0) * (y1 - y0) * (z1 - z0);
+  if (box <= 0 || samples <= 0) return 0.0;
+  SplitMix rng{seed};
+  int between = 0;
+  for (int k = 0; k < samples; ++k) {
+    const double x = x0 + rng.uniform() * (x1 - x0);
+    const double y = y0 + rng.uniform() * (y1 - y0);
+    const double z = z0 + rng.uniform() * (z1 - z0);
+    const double a = height_in(before_tris, x, y);
+    if (std::isnan(a)) continue;  // outside the star: both surfaces agree there
+    const double b = height_in(after_tris, x, y);
+    if (std::isnan(b)) continue;
+    if ((a < z && z < b) || (b < z && z < a)) ++between;
+  }
+  return box * between / samples;
+}
+
+namespace {
+
+double dist3(const Point3& a, const Point3& b) {
+  return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) + (a.z - b.z) * (a.z - b.z));
+}
+
+// Shortest path from link[from] over `steps` fan triangles to the link vertex reached going
+// counter-clockwise (dir = +1) or clockwise (dir = -1) round the apex. The fan is unfolded
+// into the plane around the apex (at the origin): when the unfolded angle is pi or more the
+// path runs through the apex; otherwise it is the taut string from one end to the other,
+// bent round the link vertices that poke towards the apex (a convex chain).
+double fan_geodesic(const Star& s, const std::vector<double>& radius,
+                    const std::vector<double>& angle, std::size_t from, std::size_t steps,
+                    int dir, std::vector<P2>& chain) {
+  const auto step = [&](std::size_t i) { return dir > 0 ? (i + 1) % s.n : (i + s.n - 1) % s.n; };
+  const auto face = [&](std::size_t i) { return dir > 0 ? i : (i + s.n - 1) % s.n; };
+  double total = 0.0;
+  std::size_t idx = from;
+  for (std::size_t k = 0; k < steps; ++k, idx = step(idx)) total += angle[face(idx)];
+  if (total >= M_PI) return radius[from] + radius[idx];
+  chain.clear();
+  chain.push_back({radius[from], 0.0});
+  total = 0.0;
+  idx = from;
+  for (std::size_t k = 0; k < steps; ++k) {
+    total += angle[face(idx)];
+    idx = step(idx);
+    chain.push_back({radius[idx] * std::cos(total), radius[idx] * std::sin(total)});
+  }
+  // Keep only right turns: those are the link vertices the string wraps round.
+  std::size_t h = 0;
+  for (std::size_t k = 0; k < chain.size(); ++k) {
+    while (h >= 2 && cross(chain[h - 2], chain[h - 1], chain[k]) >= 0) --h;
+    chain[h++] = chain[k];
+  }
+  double len = 0.0;
+  for (std::size_t k = 1; k < h; ++k) {
+    len += std::hypot(chain[k].x - chain[k - 1].x, chain[k].y - chain[k - 1].y);
+  }
+  return len;
+}
+
+}  // namespace
+
+double pld_importance(const Star& s) {
+  const std::size_t n = s.n;
+  std::vector<double> radius(n), angle(n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) radius[i] = dist3(s.apex, s.link[i]);
+  // The 3D angle at the apex of each fan triangle.
+  for (std::size_t i = 0; i < fan_count(s); ++i) {
+    const Point3& a = s.link[i];
+    const Point3& b = s.link[(i + 1) % n];
+    const double ax = a.x - s.apex.x, ay = a.y - s.apex.y, az = a.z - s.apex.z;
+    const double bx = b.x - s.apex.x, by = b.y - s.apex.y, bz = b.z - s.apex.z;
+    const double cx = ay * bz - az * by, cy = az * bx - ax * bz, cz = ax * by - ay * bx;
+    angle[i] = std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), ax * bx + ay * by + az * bz);
+  }
+  double ratio = 1.0;
+  std::vector<P2> chain;
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = i + 2; j < n; ++j) {
+      if (s.closed && i == 0 && j == n - 1) continue;  // joined by a link edge
+      const double ed = dist3(s.link[i], s.link[j]);
+      double gd = fan_geodesic(s, radius, angle, i, j - i, +1, chain);
+      if (s.closed) gd = std::min(gd, fan_geodesic(s, radius, angle, i, n - (j - i), -1, chain));
+      if (gd > 0) ratio = std::min(ratio, ed / gd);
+    }
+  }
+  return 1.0 - ratio;
+}
+
+}  // namespace dpts::core

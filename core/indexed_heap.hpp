@@ -1,0 +1,108 @@
+// A binary min-heap of item ids keyed by (priority, id), with O(log n) update and erase.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace dpts::core {
+
+// Items are ids in [0, capacity). Equal priorities are ordered by id, so the order of pops is
+// fully determined by the keys (deterministic tie-breaking).
+class IndexedMinHeap {
+ public:
+  static constexpr std::uint32_t kAbsent = std::numeric_limits<std::uint32_t>::max();
+
+  explicit IndexedMinHeap(std::size_t capacity = 0) : pos_(capacity, kAbsent) {}
+
+  bool empty() const { return heap_.empty(); }
+  std::size_t size() const { return heap_.size(); }
+  bool contains(std::uint32_t id) const { return pos_[id] != kAbsent; }
+  std::uint32_t top() const { return heap_.front().id; }
+  double top_key() const { return heap_.front().key; }
+
+  // Builds the heap from (id, key) pairs at once, in O(n).
+  void assign(const std::vector<std::uint32_t>& ids, const std::vector<double>& keys) {
+    heap_.resize(ids.size());
+    for (std::size_t i = 0; i < ids.size(); ++i) place(i, {keys[i], ids[i]});
+    for (std::size_t i = heap_.size() / 2; i-- > 0;) sift_down(i);
+  }
+
+  // Inserts id or changes its key.
+  void set(std::uint32_t id, double key) {
+    if (pos_[id] == kAbsent) {
+      heap_.push_back({key, id});
+      sift_up(heap_.size() - 1);
+      return;
+    }
+    const std::size_t p = pos_[id];
+    const double old = heap_[p].key;
+    heap_[p].key = key;
+    if (key < old) {
+      sift_up(p);
+    } else {
+      sift_down(p);
+    }
+  }
+
+  void erase(std::uint32_t id) {
+    const std::uint32_t p = pos_[id];
+    if (p == kAbsent) return;
+    const Entry last = heap_.back();
+    heap_.pop_back();
+    pos_[id] = kAbsent;
+    if (last.id == id) return;
+    place(p, last);
+    sift_up(p);
+    sift_down(pos_[last.id]);
+  }
+
+  std::uint32_t pop() {
+    const std::uint32_t id = heap_.front().id;
+    erase(id);
+    return id;
+  }
+
+ private:
+  // note: keys live in the heap entries, not behind the ids, so sifting reads contiguous
+  // memory.
+  struct Entry {
+    double key;
+    std::uint32_t id;
+  };
+  static bool less(const Entry& a, const Entry& b) {
+    return a.key < b.key || (a.key == b.key && a.id < b.id);
+  }
+  void place(std::size_t i, const Entry& e) {
+    heap_[i] = e;
+    pos_[e.id] = static_cast<std::uint32_t>(i);
+  }
+  void sift_up(std::size_t i) {
+    const Entry e = heap_[i];
+    while (i > 0) {
+      const std::size_t parent = (i - 1) / 2;
+      if (!less(e, heap_[parent])) break;
+      place(i, heap_[parent]);
+      i = parent;
+    }
+    place(i, e);
+  }
+  void sift_down(std::size_t i) {
+    const Entry e = heap_[i];
+    const std::size_t n = heap_.size();
+    for (;;) {
+      std::size_t child = 2 * i + 1;
+      if (child >= n) break;
+      if (child + 1 < n && less(heap_[child + 1], heap_[child])) ++child;
+      if (!less(heap_[child], e)) break;
+      place(i, heap_[child]);
+      i = child;
+    }
+    place(i, e);
+  }
+
+  std::vector<std::uint32_t> pos_;
+  std::vector<Entry> heap_;
+};
+
+}  // namespace dpts::core

@@ -1,0 +1,25 @@
+// Structural checks of a triangle mesh seen from above: orientation, edge use and area.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace dpts::core {
+
+struct MeshCheck {
+  std::size_t faces = 0;
+  std::size_t clockwise_or_flat = 0;    // faces not strictly counter-clockwise in x, y
+  std::size_t bad_edges = 0;            // edges used twice in one direction or by > 2 faces
+  std::size_t boundary_edges = 0;       // edges used by exactly one face
+  double area = 0.0;                    // sum of signed face areas in x, y
+};
+
+// Counter-clockwise faces whose interior edges are each shared by exactly two faces in
+// opposite directions form a proper planar subdivision of their union; with area equal to
+// the footprint's, they cover it exactly once.
+MeshCheck check_mesh(const std::vector<double>& xy,  // x0, y0, x1, y1, ...
+                     const std::vector<std::array<std::uint32_t, 3>>& faces);
+
+}  // namespace dpts::core

@@ -1,0 +1,64 @@
+// Atomic output files: mkstemp in the target directory, fsync, rename.
+#include "io/atomic_output_file.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <vector>
+
+#include "core/errors.hpp"
+
+namespace dpts::io {
+
+AtomicOutputFile::AtomicOutputFile(std::filesystem::path final_path) : final_(std::move(final_path)) {
+  const auto dir = final_.has_parent_path() ? final_.parent_path() : std::filesystem::path(".");
+  std::string pattern = (dir / ("." + final_.filename().string() + ".partial-XXXXXX")).string();
+  std::vector<char> name(pattern.begin(), pattern.end());
+  name.push_back('\0');
+  const int fd = ::mkstemp(name.data());
+  if (fd < 0) {
+    throw IoError(final_.string() + ": cannot create output (" + std::strerror(errno) + ")");
+  }
+  ::close(fd);
+  temp_ = name.data();
+  out_.open(temp_, std::ios::binary | std::ios::trunc);
+  if (!out_) {
+    std::error_code ec;
+    std::filesystem::remove(temp_, ec);
+    throw IoError(final_.string() + ": cannot open output for writing");
+  }
+}
+
+AtomicOutputFile::~AtomicOutputFile() {
+  if (committed_) return;
+  out_.close();
+  std::error_code ec;
+  std::filesystem::remove(temp_, ec);
+}
+
+void AtomicOutputFile::commit() {
+  out_.flush();
+  if (!out_) throw IoError(final_.string() + ": write failed (disk full?)");
+  out_.close();
+  if (out_.fail()) throw IoError(final_.string() + ": write failed on close");
+  // note: fsync before rename, so a crash never leaves a renamed but empty file.
+  const int fd = ::open(temp_.c_str(), O_RDONLY);
+  if (fd >= 0) {
+    const int rc = ::fsync(fd);
+    ::close(fd);
+    if (rc != 0) throw IoError(final_.string() + ": write failed (" + std::strerror(errno) + ")");
+  }
+  // mkstemp creates 0600; give the output the usual permissions (umask applies).
+  const mode_t mask = ::umask(0);
+  ::umask(mask);
+  ::chmod(temp_.c_str(), 0666 & ~mask);
+  std::error_code ec;
+  std::filesystem::rename(temp_, final_, ec);
+  if (ec) throw IoError(final_.string() + ": cannot rename output into place (" + ec.message() + ")");
+  committed_ = true;
+}
+
+}  // namespace dpts::io

@@ -1,0 +1,289 @@
+// PLY writing (binary little-endian or ASCII) and reading.
+#include "io/ply.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <istream>
+#include <map>
+#include <ostream>
+#include <sstream>
+
+#include "core/errors.hpp"
+
+namespace dpts::io {
+namespace {
+
+bool host_is_little_endian() {
+  const std::uint16_t probe = 1;
+  unsigned char first = 0;
+  std::memcpy(&first, &probe, 1);
+  return first == 1;
+}
+
+template <typename T>
+void put_le(std::string& buf, T value) {
+  char bytes[sizeof(T)];
+  std::memcpy(bytes, &value, sizeof(T));
+  if (!host_is_little_endian()) std::reverse(bytes, bytes + sizeof(T));
+  buf.append(bytes, sizeof(T));
+}
+
+void put_number(std::string& buf, double v) {
+  char tmp[32];
+  const auto res = std::to_chars(tmp, tmp + sizeof tmp, v);
+  buf.append(tmp, res.ptr);
+}
+
+void put_number(std::string& buf, std::uint32_t v) {
+  char tmp[16];
+  const auto res = std::to_chars(tmp, tmp + sizeof tmp, v);
+  buf.append(tmp, res.ptr);
+}
+
+void flush(std::ostream& out, std::string& buf) {
+  out.write(buf.data(), static_cast<std::streamsize>(buf.size()));
+  if (!out) throw IoError("write failed");
+  buf.clear();
+}
+
+}  // namespace
+
+void write_ply(std::ostream& out, const Mesh& mesh, PlyFormat format) {
+  std::string buf;
+  buf += "ply\nformat ";
+  buf += format == PlyFormat::ascii ? "ascii 1.0\n" : "binary_little_endian 1.0\n";
+  for (std::string c : mesh.comments) {
+    std::replace(c.begin(), c.end(), '\n', ' ');
+    std::replace(c.begin(), c.end(), '\r', ' ');
+    buf += "comment " + c + "\n";
+  }
+  buf += "element vertex " + std::to_string(mesh.vertex_count()) + "\n";
+  buf += "property double x\nproperty double y\nproperty double z\n";
+  buf += "element face " + std::to_string(mesh.faces.size()) + "\n";
+  buf += "property list uchar int vertex_indices\nend_header\n";
+  constexpr std::size_t kChunk = 1 << 20;
+  for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
+    if (format == PlyFormat::ascii) {
+      put_number(buf, mesh.xyz[3 * i]);
+      buf += ' ';
+      put_number(buf, mesh.xyz[3 * i + 1]);
+      buf += ' ';
+      put_number(buf, mesh.xyz[3 * i + 2]);
+      buf += '\n';
+    } else {
+      for (int k = 0; k < 3; ++k) put_le(buf, mesh.xyz[3 * i + k]);
+    }
+    if (buf.size() > kChunk) flush(out, buf);
+  }
+  for (const auto& f : mesh.faces) {
+    if (format == PlyFormat::ascii) {
+      buf += "3 ";
+      put_number(buf, f[0]);
+      buf += ' ';
+      put_number(buf, f[1]);
+      buf += ' ';
+      put_number(buf, f[2]);
+      buf += '\n';
+    } else {
+      buf += static_cast<char>(3);
+      for (int k = 0; k < 3; ++k) put_le(buf, static_cast<std::int32_t>(f[k]));
+    }
+    if (buf.size() > kChunk) flush(out, buf);
+  }
+  flush(out, buf);
+  out.flush();
+  if (!out) throw IoError("write failed");
+}
+
+namespace {
+
+enum class Type { i8, u8, i16, u16, i32, u32, f32, f64 };
+
+Type parse_type(const std::string& t, const std::string& name) {
+  static const std::map<std::string, Type> types = {
+      {"char", Type::i8},   {"int8", Type::i8},     {"uchar", Type::u8},  {"uint8", Type::u8},
+      {"short", Type::i16}, {"int16", Type::i16},   {"ushort", Type::u16}, {"uint16", Type::u16},
+      {"int", Type::i32},   {"int32", Type::i32},   {"uint", Type::u32},  {"uint32", Type::u32},
+      {"float", Type::f32}, {"float32", Type::f32}, {"double", Type::f64}, {"float64", Type::f64}};
+  const auto it = types.find(t);
+  if (it == types.end()) throw InputError(name + ": unknown PLY type '" + t + "'");
+  return it->second;
+}
+
+std::size_t type_size(Type t) {
+  switch (t) {
+    case Type::i8: case Type::u8: return 1;
+    case Type::i16: case Type::u16: return 2;
+    case Type::i32: case Type::u32: case Type::f32: return 4;
+    case Type::f64: return 8;
+  }
+  return 0;
+}
+
+struct Property {
+  std::string name;
+  Type type = Type::f64;
+  bool is_list = false;
+  Type count_type = Type::u8;
+};
+
+struct Element {
+  std::string name;
+  std::size_t count = 0;
+  std::vector<Property> props;
+};
+
+// Reads one value of type t from a binary stream (little or big endian).
+double read_binary(std::istream& in, Type t, bool big_endian, const std::string& name) {
+  char b[8];
+  const std::size_t n = type_size(t);
+  if (!in.read(b, static_cast<std::streamsize>(n))) throw InputError(name + ": truncated PLY data");
+  if (big_endian == host_is_little_endian()) std::reverse(b, b + n);
+  switch (t) {
+    case Type::i8: { std::int8_t v; std::memcpy(&v, b, 1); return v; }
+    case Type::u8: { std::uint8_t v; std::memcpy(&v, b, 1); return v; }
+    case Type::i16: { std::int16_t v; std::memcpy(&v, b, 2); return v; }
+    case Type::u16: { std::uint16_t v; std::memcpy(&v, b, 2); return v; }
+    case Type::i32: { std::int32_t v; std::memcpy(&v, b, 4); return v; }
+    case Type::u32: { std::uint32_t v; std::memcpy(&v, b, 4); return v; }
+    case Type::f32: { float v; std::memcpy(&v, b, 4); return v; }
+    case Type::f64: { double v; std::memcpy(&v, b, 8); return v; }
+  }
+  return 0;
+}
+
+double read_ascii(std::istream& in, const std::string& name) {
+  std::string tok;
+  if (!(in >> tok)) throw InputError(name + ": truncated PLY data");
+  double v = 0;
+  const auto res = std::from_chars(tok.data(), tok.data() + tok.size(), v);
+  if (res.ec != std::errc() || res.ptr != tok.data() + tok.size()) {
+    throw InputError(name + ": bad number '" + tok + "' in PLY data");
+  }
+  return v;
+}
+
+}  // namespace
+
+Mesh read_ply(std::istream& in, const std::string& name) {
+  Mesh mesh;
+  std::string line;
+  if (!std::getline(in, line) || line.substr(0, 3) != "ply") throw InputError(name + ": not a PLY file");
+  std::string format;
+  std::vector<Element> elements;
+  for (;;) {
+    if (!std::getline(in, line)) throw InputError(name + ": PLY header has no end_header");
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream ls(line);
+    std::string key;
+    ls >> key;
+    if (key == "end_header") break;
+    if (key == "format") {
+      ls >> format;
+    } else if (key == "comment") {
+      mesh.comments.push_back(line.size() > 8 ? line.substr(8) : "");
+    } else if (key == "element") {
+      Element e;
+      long long count = -1;
+      ls >> e.name >> count;
+      if (count < 0) throw InputError(name + ": bad PLY element line '" + line + "'");
+      e.count = static_cast<std::size_t>(count);
+      elements.push_back(e);
+    } else if (key == "property") {
+      if (elements.empty()) throw InputError(name + ": PLY property before any element");
+      Property p;
+      std::string t;
+      ls >> t;
+      if (t == "list") {
+        std::string ct, it;
+        ls >> ct >> it >> p.name;
+        p.is_list = true;
+        p.count_type = parse_type(ct, name);
+        p.type = parse_type(it, name);
+      } else {
+        p.type = parse_type(t, name);
+        ls >> p.name;
+      }
+      elements.back().props.push_back(p);
+    }
+  }
+  const bool ascii = format == "ascii";
+  const bool big = format == "binary_big_endian";
+  if (!ascii && !big && format != "binary_little_endian") {
+    throw InputError(name + ": unknown PLY format '" + format + "'");
+  }
+  auto value = [&](Type t) { return ascii ? read_ascii(in, name) : read_binary(in, t, big, name); };
+  bool seen_vertex = false;
+  for (const Element& e : elements) {
+    if (e.name == "vertex") {
+      int ix = -1, iy = -1, iz = -1;
+      for (std::size_t k = 0; k < e.props.size(); ++k) {
+        if (e.props[k].name == "x") ix = static_cast<int>(k);
+        if (e.props[k].name == "y") iy = static_cast<int>(k);
+        if (e.props[k].name == "z") iz = static_cast<int>(k);
+      }
+      if (ix < 0 || iy < 0 || iz < 0) throw InputError(name + ": PLY vertices lack x, y or z");
+      mesh.xyz.resize(3 * e.count);
+      for (std::size_t i = 0; i < e.count; ++i) {
+        for (std::size_t k = 0; k < e.props.size(); ++k) {
+          const Property& p = e.props[k];
+          if (p.is_list) {
+            const auto n = static_cast<std::size_t>(value(p.count_type));
+            for (std::size_t m = 0; m < n; ++m) value(p.type);
+            continue;
+          }
+          const double v = value(p.type);
+          if (static_cast<int>(k) == ix) mesh.xyz[3 * i] = v;
+          if (static_cast<int>(k) == iy) mesh.xyz[3 * i + 1] = v;
+          if (static_cast<int>(k) == iz) mesh.xyz[3 * i + 2] = v;
+        }
+      }
+      seen_vertex = true;
+    } else if (e.name == "face") {
+      if (!seen_vertex) throw InputError(name + ": PLY faces come before vertices");
+      mesh.faces.reserve(e.count);
+      for (std::size_t i = 0; i < e.count; ++i) {
+        for (const Property& p : e.props) {
+          if (!p.is_list) {
+            value(p.type);
+            continue;
+          }
+          const double n = value(p.count_type);
+          if (p.name != "vertex_indices" && p.name != "vertex_index") {
+            for (int m = 0; m < static_cast<int>(n); ++m) value(p.type);
+            continue;
+          }
+          if (n != 3) throw InputError(name + ": face " + std::to_string(i) + " is not a triangle");
+          std::array<std::uint32_t, 3> f{};
+          for (int m = 0; m < 3; ++m) {
+            const double idx = value(p.type);
+            if (!(idx >= 0 && idx < static_cast<double>(mesh.vertex_count()))) {
+              throw InputError(name + ": face " + std::to_string(i) + " has vertex index out of range");
+            }
+            f[m] = static_cast<std::uint32_t>(idx);
+          }
+          mesh.faces.push_back(f);
+        }
+      }
+    } else {
+      for (std::size_t i = 0; i < e.count; ++i) {
+        for (const Property& p : e.props) {
+          const std::size_t n = p.is_list ? static_cast<std::size_t>(value(p.count_type)) : 1;
+          for (std::size_t m = 0; m < n; ++m) value(p.type);
+        }
+      }
+    }
+  }
+  return mesh;
+}
+
+Mesh read_ply_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open");
+  return read_ply(in, path);
+}
+
+}  // namespace dpts::io

@@ -1,0 +1,33 @@
+// PLY meshes: writing dpts output, reading any triangle PLY (ascii or binary, float or double).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace dpts::io {
+
+struct Mesh {
+  std::vector<double> xyz;                            // x0, y0, z0, x1, ...
+  std::vector<std::array<std::uint32_t, 3>> faces;    // counter-clockwise seen from above
+  std::vector<std::string> comments;                  // header comments, in order
+
+  std::size_t vertex_count() const { return xyz.size() / 3; }
+};
+
+enum class PlyFormat { binary_little_endian, ascii };
+
+// Writes `mesh` as PLY: vertex x y z as double, faces as `list uchar int vertex_indices`,
+// each comment as a `comment` line (newlines in comments become spaces). Numbers in ASCII
+// use the shortest round-trip form (std::to_chars, no locale). Throws IoError if the stream
+// fails.
+void write_ply(std::ostream& out, const Mesh& mesh, PlyFormat format);
+
+// Reads a PLY mesh with vertex properties x, y, z (float or double, other properties
+// ignored) and triangular faces. Throws InputError naming `name` on malformed input.
+Mesh read_ply(std::istream& in, const std::string& name);
+Mesh read_ply_file(const std::string& path);
+
+}  // namespace dpts::io

@@ -1,0 +1,60 @@
+// Whole-DEM simplification: CGAL triangulation, parallel initial importance, elimination.
+#include "parallel/simplify.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "core/errors.hpp"
+
+namespace dpts::par {
+namespace {
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+std::size_t target_count(const KeepTarget& target, std::size_t input) {
+  std::size_t n = input;
+  if (target.vertices) {
+    n = *target.vertices;
+  } else if (target.percent) {
+    n = static_cast<std::size_t>(std::llround(*target.percent / 100.0 * static_cast<double>(input)));
+  }
+  return std::min(input, std::max<std::size_t>(3, n));
+}
+
+core::Tin simplify_dem(const core::HeightGrid& grid, const core::GridFrame& frame,
+                       const core::EliminationOptions& options, const KeepTarget& target,
+                       const core::Progress& progress, SimplifyStats* stats) {
+  SimplifyStats local;
+  SimplifyStats& st = stats ? *stats : local;
+  auto t0 = std::chrono::steady_clock::now();
+  if (progress && !progress(0.0, "triangulate")) throw Cancelled();
+  core::Eliminator elim(grid, frame, options);
+  st.input_vertices = elim.vertex_count();
+  st.target_vertices = target_count(target, st.input_vertices);
+  st.triangulate_s = seconds_since(t0);
+
+  // The initial importance of every vertex depends only on the triangulation: compute it in
+  // parallel, each task writing its own vertices' slots.
+  t0 = std::chrono::steady_clock::now();
+  if (progress && !progress(0.0, "importance")) throw Cancelled();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, elim.vertex_count(), 2048),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      elim.compute_importance(r.begin(), r.end());
+                    });
+  st.importance_s = seconds_since(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  elim.eliminate(st.target_vertices, progress);
+  core::Tin tin = elim.tin();
+  st.kept_vertices = tin.cells.size();
+  st.simplify_s = seconds_since(t0);
+  return tin;
+}
+
+}  // namespace dpts::par

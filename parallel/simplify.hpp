@@ -1,0 +1,35 @@
+// Simplification of a whole DEM held in memory, with oneTBB for the parallel stages.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+
+#include "core/elimination.hpp"
+#include "core/grid.hpp"
+
+namespace dpts::par {
+
+// How many vertices to keep: a percentage of the input's surface vertices (P2L) or a count.
+struct KeepTarget {
+  std::optional<double> percent;       // in (0, 100]
+  std::optional<std::size_t> vertices;  // >= 3
+};
+
+struct SimplifyStats {
+  std::size_t input_vertices = 0;   // surface vertices of the DEM
+  std::size_t target_vertices = 0;  // what the keep target asks for
+  std::size_t kept_vertices = 0;    // may exceed target when the outline needs more
+  double triangulate_s = 0, importance_s = 0, simplify_s = 0;
+};
+
+// Number of vertices a target keeps out of `input` (rounded, at least 3, at most input).
+std::size_t target_count(const KeepTarget& target, std::size_t input);
+
+// Builds the Delaunay TIN of the DEM, computes the initial importance of all vertices in
+// parallel (oneTBB tasks over vertex ranges; the result does not depend on the thread count),
+// then eliminates vertices down to the target. Progress is reported from serial stages.
+core::Tin simplify_dem(const core::HeightGrid& grid, const core::GridFrame& frame,
+                       const core::EliminationOptions& options, const KeepTarget& target,
+                       const core::Progress& progress, SimplifyStats* stats = nullptr);
+
+}  // namespace dpts::par
