@@ -2,6 +2,7 @@
 #include "core/mesh_check.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <utility>
 
 namespace dpts::core {
@@ -39,6 +40,40 @@ MeshCheck check_mesh(const std::vector<double>& xy,
     i = j;
   }
   return result;
+}
+
+std::size_t faces_over_nodata(const HeightGrid& grid, const std::vector<double>& grid_xy,
+                              const std::vector<std::array<std::uint32_t, 3>>& faces,
+                              double tolerance) {
+  std::size_t bad = 0;
+  for (const auto& f : faces) {
+    double x[3], y[3];
+    for (int i = 0; i < 3; ++i) x[i] = grid_xy[2 * f[i]], y[i] = grid_xy[2 * f[i] + 1];
+    const double area2 = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0]);
+    const double sign = area2 >= 0 ? 1.0 : -1.0;
+    const int c0 = static_cast<int>(std::floor(std::min({x[0], x[1], x[2]}) - tolerance));
+    const int c1 = static_cast<int>(std::ceil(std::max({x[0], x[1], x[2]}) + tolerance));
+    const int r0 = static_cast<int>(std::floor(std::min({y[0], y[1], y[2]}) - tolerance));
+    const int r1 = static_cast<int>(std::ceil(std::max({y[0], y[1], y[2]}) + tolerance));
+    bool over = c0 < -1 || r0 < -1 || c1 > grid.width || r1 > grid.height;
+    for (int r = std::max(r0, 0); r <= std::min(r1, grid.height - 1) && !over; ++r) {
+      for (int c = std::max(c0, 0); c <= std::min(c1, grid.width - 1) && !over; ++c) {
+        if (grid.is_valid(c, r)) continue;
+        // Inside or on the triangle (edges widened by the tolerance)?
+        bool inside = true;
+        for (int i = 0; i < 3 && inside; ++i) {
+          const int j = (i + 1) % 3;
+          const double ex = x[j] - x[i], ey = y[j] - y[i];
+          const double len = std::hypot(ex, ey);
+          const double side = sign * (ex * (r - y[i]) - ey * (c - x[i])) / (len > 0 ? len : 1.0);
+          inside = side >= -tolerance;
+        }
+        over = inside;
+      }
+    }
+    if (over) ++bad;
+  }
+  return bad;
 }
 
 }  // namespace dpts::core

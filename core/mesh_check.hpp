@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/grid.hpp"
+
 namespace dpts::core {
 
 struct MeshCheck {
@@ -21,5 +23,12 @@ struct MeshCheck {
 // the footprint's, they cover it exactly once.
 MeshCheck check_mesh(const std::vector<double>& xy,  // x0, y0, x1, y1, ...
                      const std::vector<std::array<std::uint32_t, 3>>& faces);
+
+// Number of faces that contain (closed, in grid space) the centre of a no-data cell or reach
+// outside the grid. grid_xy holds each vertex's grid position (col, row) as doubles;
+// `tolerance` (in cells) absorbs rounding from coordinate transformations.
+std::size_t faces_over_nodata(const HeightGrid& grid, const std::vector<double>& grid_xy,
+                              const std::vector<std::array<std::uint32_t, 3>>& faces,
+                              double tolerance = 1e-6);
 
 }  // namespace dpts::core

@@ -1,0 +1,61 @@
+// BM_simplify_dem: VP and PLD to 10 % on the 770k-cell San Gabriel DEM, in input cells/s.
+#include <benchmark/benchmark.h>
+#include <cpl_conv.h>
+#include <gdal_priv.h>
+#include <tbb/global_control.h>
+
+#include <memory>
+#include <string>
+
+#include "io/dem_reader.hpp"
+#include "parallel/simplify.hpp"
+
+namespace {
+
+const std::string kDem = std::string(DPTS_SHARED_DATA_DIR) + "/san_gabriel_bigtujunga_utm11.tif";
+
+const dpts::io::Dem* load() {
+  static std::unique_ptr<dpts::io::Dem> dem = [] {
+    GDALAllRegister();
+    CPLSetConfigOption("GDAL_CACHEMAX", "64");
+    try {
+      return std::make_unique<dpts::io::Dem>(dpts::io::read_dem(kDem, {}, nullptr));
+    } catch (const std::exception&) {
+      return std::unique_ptr<dpts::io::Dem>();
+    }
+  }();
+  return dem.get();
+}
+
+void BM_simplify_dem(benchmark::State& state, dpts::core::Importance kind) {
+  const dpts::io::Dem* dem = load();
+  if (!dem) {
+    state.SkipWithError(("cannot read " + kDem).c_str());
+    return;
+  }
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                              static_cast<std::size_t>(state.range(0)));
+  dpts::core::EliminationOptions opt;
+  opt.importance = kind;
+  dpts::par::KeepTarget target;
+  target.percent = 10.0;
+  for (auto _ : state) {
+    auto tin = dpts::par::simplify_dem(dem->grid, dem->frame, opt, target, nullptr);
+    benchmark::DoNotOptimize(tin.faces.data());
+  }
+  const double cells = static_cast<double>(dem->grid.cell_count());
+  state.counters["cells/s"] = benchmark::Counter(cells * state.iterations(), benchmark::Counter::kIsRate);
+  state.counters["us/cell"] = benchmark::Counter(cells * state.iterations(),
+                                                 benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["us/cell"] = benchmark::Counter(
+      cells * state.iterations() / 1e6, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+BENCHMARK_CAPTURE(BM_simplify_dem, vp, dpts::core::Importance::vp)
+    ->Arg(1)->Arg(2)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime()->MeasureProcessCPUTime();
+BENCHMARK_CAPTURE(BM_simplify_dem, pld, dpts::core::Importance::pld)
+    ->Arg(1)->Arg(2)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime()->MeasureProcessCPUTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();

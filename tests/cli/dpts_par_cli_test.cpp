@@ -1,0 +1,183 @@
+// dpts-par as users run it: exit codes, one-line messages, no output left on failure.
+#include <catch2/catch.hpp>
+
+#include <gdal_priv.h>
+#include <ogr_spatialref.h>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include "io/ply.hpp"
+#include "test_support.hpp"
+
+using namespace dpts;
+
+namespace {
+
+const std::string kExe = DPTS_PAR_EXE;
+
+std::string utm_wkt() {
+  OGRSpatialReference srs;
+  srs.importFromEPSG(32611);
+  char* wkt = nullptr;
+  srs.exportToWkt(&wkt);
+  std::string out = wkt;
+  CPLFree(wkt);
+  return out;
+}
+
+// A small real-looking DEM with a void, in a fresh folder.
+struct Fixture {
+  test::TempDir dir;
+  std::string dem = (dir / "dem.tif").string();
+  Fixture() {
+    const auto g = test::make_grid(30, 20, [](int c, int r) {
+      if (c > 10 && c < 14 && r > 5 && r < 9) return std::numeric_limits<double>::quiet_NaN();
+      return 500.0 + 40.0 * std::sin(c * 0.4) + 3.0 * r;
+    });
+    test::write_geotiff(dem, g, {400000, 10, 0, 3800000, 0, -10}, utm_wkt());
+  }
+};
+
+int count_lines(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("dpts-par writes a georeferenced binary PLY and nothing else", "[cli]") {
+  Fixture fx;
+  const auto out = (fx.dir / "out.ply").string();
+  const auto r = test::run(kExe, {"--algo", "vp", "--keep", "20%", fx.dem, out});
+  REQUIRE(r.exit_code == 0);
+  CHECK(fx.dir.files() == std::vector<std::string>{"dem.tif", "out.ply"});
+  const io::Mesh mesh = io::read_ply_file(out);
+  CHECK(mesh.vertex_count() == 118);  // 20 % of the 591 valid cells, all surface vertices
+  REQUIRE(mesh.comments.size() == 2);
+  CHECK(mesh.comments[1].find("crs PROJCS[\"WGS 84 / UTM zone 11N\"") == 0);
+  std::ifstream in(out, std::ios::binary);
+  std::string head(40, '\0');
+  in.read(head.data(), 40);
+  CHECK(head.rfind("ply\nformat binary_little_endian 1.0\n", 0) == 0);
+  CHECK(r.err.find("591 vertices -> 118 vertices") != std::string::npos);
+}
+
+TEST_CASE("options ascii, vertices and quiet do what they say", "[cli]") {
+  Fixture fx;
+  const auto out = (fx.dir / "out.ply").string();
+  const auto r = test::run(kExe, {"--quiet", "--ascii", "--vertices", "50", "--algo", "pld", fx.dem, out});
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.err.empty());
+  CHECK(io::read_ply_file(out).vertex_count() == 50);
+  std::ifstream in(out);
+  std::string line;
+  std::getline(in, line);
+  std::getline(in, line);
+  CHECK(line == "format ascii 1.0");
+}
+
+TEST_CASE("output bytes are identical for 1 and 2 threads", "[cli][determinism]") {
+  Fixture fx;
+  std::string bytes[2];
+  for (int t = 1; t <= 2; ++t) {
+    const auto out = (fx.dir / ("t" + std::to_string(t) + ".ply")).string();
+    REQUIRE(test::run(kExe, {"--threads", std::to_string(t), fx.dem, out}).exit_code == 0);
+    std::ifstream in(out, std::ios::binary);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    bytes[t - 1] = ss.str();
+  }
+  CHECK(bytes[0].size() > 1000);
+  CHECK(bytes[0] == bytes[1]);
+}
+
+TEST_CASE("bad usage exits 2 with a one-line message naming the flag, creating nothing", "[cli]") {
+  Fixture fx;
+  const auto out = (fx.dir / "out.ply").string();
+  struct Case {
+    std::vector<std::string> args;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {{"--keep", "0%", fx.dem, out}, "--keep 0%: expected a percentage with 0 < P <= 100"},
+      {{"--keep", "150%", fx.dem, out}, "--keep 150%: expected a percentage with 0 < P <= 100"},
+      {{"--vertices", "2", fx.dem, out}, "--vertices 2: expected an integer >= 3"},
+      {{"--keep", "10%", "--vertices", "50", fx.dem, out}, "--keep and --vertices: give one, not both"},
+      {{"--algo", "qslim", fx.dem, out}, "--algo qslim: expected vp or pld"},
+      {{"--threads", "0", fx.dem, out}, "--threads 0: expected an integer >= 1"},
+      {{"--bogus", fx.dem, out}, "--bogus: unknown option"},
+      {{fx.dem}, "expected INPUT and OUTPUT"},
+      {{fx.dem, fx.dem}, fx.dem + ": OUTPUT is the INPUT file"},
+      {{"--t-srs", "EPSG:4326", fx.dem, out}, "--t-srs EPSG:4326: expected a projected CRS"},
+  };
+  for (const auto& c : cases) {
+    INFO(c.args[0]);
+    const auto r = test::run(kExe, c.args);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err.rfind("dpts-par: " + c.message, 0) == 0);
+    CHECK(count_lines(r.err) == 2);  // the message and a pointer to --help
+    CHECK(fx.dir.files() == std::vector<std::string>{"dem.tif"});
+  }
+}
+
+TEST_CASE("failures exit 1 with a one-line message naming the file, leaving no output", "[cli]") {
+  Fixture fx;
+  const auto out = (fx.dir / "out.ply").string();
+  std::ofstream(fx.dir / "notes.txt") << "these are not heights\n";
+  const auto missing = (fx.dir / "missing.tif").string();
+  const auto text = (fx.dir / "notes.txt").string();
+  const auto bad_dir = (fx.dir / "no" / "such" / "dir" / "out.ply").string();
+  struct Case {
+    std::vector<std::string> args;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {{missing, out}, "dpts-par: error: " + missing + ": no such file"},
+      {{text, out}, "dpts-par: error: " + text + ": not a raster GDAL can read"},
+      {{fx.dem, bad_dir}, "dpts-par: error: " + bad_dir + ": cannot create output"},
+  };
+  for (const auto& c : cases) {
+    INFO(c.message);
+    const auto r = test::run(kExe, c.args);
+    CHECK(r.exit_code == 1);
+    CHECK(r.err.rfind(c.message, 0) == 0);
+    CHECK(count_lines(r.err) == 1);
+    CHECK(fx.dir.files() == std::vector<std::string>{"dem.tif", "notes.txt"});
+  }
+}
+
+TEST_CASE("a failed run leaves an existing output untouched", "[cli]") {
+  Fixture fx;
+  const auto out = fx.dir / "keep.ply";
+  std::ofstream(out) << "precious";
+  const auto r = test::run(kExe, {(fx.dir / "missing.tif").string(), out.string()});
+  CHECK(r.exit_code == 1);
+  std::ifstream in(out);
+  std::string s;
+  std::getline(in, s);
+  CHECK(s == "precious");
+}
+
+TEST_CASE("an output path that cannot be written fails, naming the output", "[cli]") {
+  // A regular file as the output's folder: unwritable even for root.
+  Fixture fx;
+  const auto out = (fx.dir / "dem.tif" / "out.ply").string();
+  const auto r = test::run(kExe, {fx.dem, out});
+  CHECK(r.exit_code == 1);
+  CHECK(r.err.rfind("dpts-par: error: " + out + ": cannot create output", 0) == 0);
+  CHECK(fx.dir.files() == std::vector<std::string>{"dem.tif"});
+}
+
+TEST_CASE("help and version exit 0 on stdout", "[cli]") {
+  const auto h = test::run(kExe, {"--help"});
+  CHECK(h.exit_code == 0);
+  CHECK(h.out.rfind("usage: dpts-par [options] INPUT OUTPUT", 0) == 0);
+  CHECK(h.out.find("--tile-mb") != std::string::npos);
+  const auto v = test::run(kExe, {"--version"});
+  CHECK(v.exit_code == 0);
+  CHECK(v.out.rfind("dpts-par 0.1.0", 0) == 0);
+}

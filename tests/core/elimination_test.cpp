@@ -1,0 +1,204 @@
+// Vertex elimination on hand-made DEMs: counts, footprint, Delaunay validity, determinism.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include "core/elimination.hpp"
+#include "core/footprint.hpp"
+#include "core/mesh_check.hpp"
+#include "parallel/simplify.hpp"
+#include "test_support.hpp"
+
+using namespace dpts;
+
+namespace {
+
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Hills with a round void inside, a notch cut into the east edge and a missing NW corner:
+// concave outline, a hole, and straight outline runs to simplify.
+core::HeightGrid hills(int w = 40, int h = 32) {
+  return test::make_grid(w, h, [w, h](int c, int r) {
+    if (std::hypot(c - 12.0, r - 14.0) < 4.0) return kNaN;           // void
+    if (c >= w - 6 && r >= h / 2 - 2 && r <= h / 2 + 2) return kNaN;  // notch
+    if (c + r < 3) return kNaN;                                       // cut corner
+    return 100.0 + 20.0 * std::sin(c * 0.3) * std::cos(r * 0.25) + 0.5 * c;
+  });
+}
+
+core::Tin simplify(const core::HeightGrid& g, core::Importance kind, std::size_t keep,
+                   core::GridFrame frame = {}) {
+  core::EliminationOptions opt;
+  opt.importance = kind;
+  par::KeepTarget target;
+  target.vertices = keep;
+  return par::simplify_dem(g, frame, opt, target, nullptr);
+}
+
+// Frame positions of a TIN's vertices.
+std::vector<double> frame_xy(const core::HeightGrid& g, const core::GridFrame& f, const core::Tin& tin) {
+  std::vector<double> xy;
+  for (std::uint32_t cell : tin.cells) {
+    const int c = static_cast<int>(cell % g.width), r = static_cast<int>(cell / g.width);
+    xy.push_back(f.u(c, r));
+    xy.push_back(f.w(c, r));
+  }
+  return xy;
+}
+
+// Number of interior edges whose opposite vertex lies strictly inside the circumcircle.
+std::size_t non_delaunay_edges(const std::vector<double>& xy, const core::Tin& tin) {
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> apex_of;  // directed edge -> apex
+  for (const auto& f : tin.faces) {
+    for (int i = 0; i < 3; ++i) apex_of[{f[i], f[(i + 1) % 3]}] = f[(i + 2) % 3];
+  }
+  std::size_t bad = 0;
+  for (const auto& [edge, apex] : apex_of) {
+    const auto twin = apex_of.find({edge.second, edge.first});
+    if (twin == apex_of.end()) continue;
+    auto P = [&](std::uint32_t v) { return std::pair<double, double>{xy[2 * v], xy[2 * v + 1]}; };
+    const auto [ax, ay] = P(edge.first);
+    const auto [bx, by] = P(edge.second);
+    const auto [cx, cy] = P(apex);
+    const auto [dx, dy] = P(twin->second);
+    // In-circle determinant of d against ccw triangle (a, b, c).
+    const double adx = ax - dx, ady = ay - dy, bdx = bx - dx, bdy = by - dy, cdx = cx - dx, cdy = cy - dy;
+    const double det = (adx * adx + ady * ady) * (bdx * cdy - bdy * cdx) -
+                       (bdx * bdx + bdy * bdy) * (adx * cdy - ady * cdx) +
+                       (cdx * cdx + cdy * cdy) * (adx * bdy - ady * bdx);
+    if (det > 1e-9) ++bad;
+  }
+  return bad;
+}
+
+// Checks every structural property of a simplified TIN over grid g.
+void check_tin(const core::HeightGrid& g, const core::Tin& tin, const core::GridFrame& f = {}) {
+  const auto xy = frame_xy(g, f, tin);
+  const core::MeshCheck mc = core::check_mesh(xy, tin.faces);
+  CHECK(mc.clockwise_or_flat == 0);
+  CHECK(mc.bad_edges == 0);
+  const double det = std::fabs(f.m[0][0] * f.m[1][1] - f.m[0][1] * f.m[1][0]);
+  CHECK(mc.area == Approx(core::footprint_area_cells(g) * det).epsilon(1e-12));
+  CHECK(core::faces_over_nodata(g, test::grid_xy(g, tin), tin.faces) == 0);
+  CHECK(non_delaunay_edges(xy, tin) == 0);
+  CHECK(std::is_sorted(tin.cells.begin(), tin.cells.end()));
+  // Every kept vertex is used by a face.
+  std::vector<bool> used(tin.cells.size(), false);
+  for (const auto& face : tin.faces) {
+    for (auto v : face) used[v] = true;
+  }
+  CHECK(std::count(used.begin(), used.end(), false) == 0);
+}
+
+}  // namespace
+
+TEST_CASE("elimination keeps exactly the requested count and the exact footprint",
+          "[core][simplify]") {
+  const auto g = hills();
+  const std::size_t input = core::surface_cells(g).size();
+  const auto kind = GENERATE(core::Importance::vp, core::Importance::pld);
+  const double share = GENERATE(0.7, 0.3, 0.1);
+  const auto keep = static_cast<std::size_t>(share * input);
+  const core::Tin tin = simplify(g, kind, keep);
+  CHECK(tin.cells.size() == keep);
+  check_tin(g, tin);
+}
+
+TEST_CASE("the unsimplified TIN is the grid split along NW-SE diagonals", "[core][simplify]") {
+  const auto g = test::make_grid(6, 5, [](int c, int r) { return c * r; });
+  const core::Tin tin = simplify(g, core::Importance::vp, 30);
+  REQUIRE(tin.cells.size() == 30);
+  REQUIRE(tin.faces.size() == 2 * 5 * 4);
+  // Every face contains a NW-SE diagonal (r,c)-(r+1,c+1): index difference width + 1.
+  for (const auto& f : tin.faces) {
+    bool diagonal = false;
+    for (int i = 0; i < 3; ++i) {
+      const auto a = tin.cells[f[i]], b = tin.cells[f[(i + 1) % 3]];
+      diagonal |= std::max(a, b) - std::min(a, b) == 7u;
+    }
+    CHECK(diagonal);
+  }
+}
+
+TEST_CASE("a plane simplifies to its four corners", "[core][simplify]") {
+  const auto g = test::make_grid(12, 9, [](int c, int r) { return 3.0 * c - 2.0 * r + 5.0; });
+  const auto kind = GENERATE(core::Importance::vp, core::Importance::pld);
+  const core::Tin tin = simplify(g, kind, 4);
+  REQUIRE(tin.cells.size() == 4);
+  CHECK(tin.cells == std::vector<std::uint32_t>{0, 11, 8 * 12, 8 * 12 + 11});
+  CHECK(tin.faces.size() == 2);
+  check_tin(g, tin);
+}
+
+TEST_CASE("corners and bends of the outline are never removed", "[core][simplify]") {
+  // Asking for 3 vertices cannot be met: the outline's corners stay, and the result is the
+  // smallest TIN with the same footprint.
+  const auto g = hills(24, 20);
+  const core::Tin tin = simplify(g, core::Importance::vp, 3);
+  CHECK(tin.cells.size() > 3);
+  check_tin(g, tin);
+  // The DEM's corners that hold data are kept.
+  for (std::uint32_t corner : {std::uint32_t(23), std::uint32_t(19 * 24), std::uint32_t(19 * 24 + 23)}) {
+    CHECK(std::binary_search(tin.cells.begin(), tin.cells.end(), corner));
+  }
+}
+
+TEST_CASE("void holes stay open at every level of simplification", "[core][simplify]") {
+  // Salt-and-pepper voids like the Kilauea sea: many one-cell holes.
+  const auto g = test::make_grid(30, 30, [](int c, int r) {
+    if ((c * 7 + r * 13) % 17 == 0 && c > 2 && r > 2) return kNaN;
+    return std::sin(c * 0.2) * 50 + r;
+  });
+  const std::size_t input = core::surface_cells(g).size();
+  for (double share : {0.5, 0.2}) {
+    const core::Tin tin = simplify(g, core::Importance::vp, static_cast<std::size_t>(share * input));
+    check_tin(g, tin);
+  }
+}
+
+TEST_CASE("elimination works in a sheared, non-square frame", "[core][simplify]") {
+  // Cells 20 m x 31 m with a slight shear, as a geographic DEM projected to UTM.
+  const double j[2][2] = {{20.0, 0.4}, {-0.3, -31.0}};
+  const auto frame = core::GridFrame::from_jacobian(j);
+  const auto g = hills(30, 24);
+  const std::size_t input = core::surface_cells(g).size();
+  const core::Tin tin = simplify(g, core::Importance::vp, input / 5, frame);
+  CHECK(tin.cells.size() == input / 5);
+  check_tin(g, tin, frame);
+}
+
+TEST_CASE("the result does not depend on how initial importance is split", "[core][determinism]") {
+  const auto g = hills(30, 24);
+  core::EliminationOptions opt;
+  opt.vp_volume = GENERATE(core::VolumeMethod::exact, core::VolumeMethod::monte_carlo);
+  auto run = [&](std::size_t chunk, bool reverse) {
+    core::Eliminator e(g, core::GridFrame{}, opt);
+    std::vector<std::pair<std::size_t, std::size_t>> ranges;
+    for (std::size_t b = 0; b < e.vertex_count(); b += chunk) {
+      ranges.emplace_back(b, std::min(e.vertex_count(), b + chunk));
+    }
+    if (reverse) std::reverse(ranges.begin(), ranges.end());
+    for (auto [b, end] : ranges) e.compute_importance(b, end);
+    e.eliminate(e.vertex_count() / 4, nullptr);
+    return e.tin();
+  };
+  const core::Tin a = run(1000000, false), b = run(7, true);
+  CHECK(a.cells == b.cells);
+  CHECK(a.faces == b.faces);
+}
+
+TEST_CASE("a DEM without three neighbouring valid cells is refused", "[core][simplify]") {
+  const auto g = test::make_grid(4, 4, [](int c, int r) { return (c + r) % 2 == 0 ? 1.0 : kNaN; });
+  CHECK_THROWS_AS(core::Eliminator(g, core::GridFrame{}, core::EliminationOptions{}), std::invalid_argument);
+}
+
+TEST_CASE("VP keeps a spike and drops flat ground first", "[core][simplify][vp]") {
+  // Flat 15 x 15 with one spike in the middle: at 10 vertices the spike must survive.
+  const auto g = test::make_grid(15, 15, [](int c, int r) { return c == 7 && r == 7 ? 50.0 : 0.0; });
+  const core::Tin tin = simplify(g, core::Importance::vp, 10);
+  CHECK(std::binary_search(tin.cells.begin(), tin.cells.end(), std::uint32_t(7 * 15 + 7)));
+  check_tin(g, tin);
+}

@@ -1,0 +1,93 @@
+// VP and PLD importance on hand-made stars, against hand-computed values.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <vector>
+
+#include "core/importance.hpp"
+
+using dpts::core::LinkTriangle;
+using dpts::core::Point3;
+using dpts::core::Star;
+
+namespace {
+
+// Square link (1,0) (0,1) (-1,0) (0,-1) round an apex at the origin, ccw.
+std::vector<Point3> square_link(double z0, double z1, double z2, double z3) {
+  return {{1, 0, z0}, {0, 1, z1}, {-1, 0, z2}, {0, -1, z3}};
+}
+// The hole refilled along the diagonal link[0]-link[2].
+const std::vector<LinkTriangle> kSplit02 = {{0, 1, 2}, {0, 2, 3}};
+
+}  // namespace
+
+TEST_CASE("removing a vertex of a plane has VP importance 0", "[core][importance][vp]") {
+  // Plane z = 2x + 3y + 1 through apex and link.
+  auto plane = [](double x, double y) { return 2 * x + 3 * y + 1; };
+  std::vector<Point3> link;
+  for (auto [x, y] : std::vector<std::pair<double, double>>{{1, 0}, {0, 1}, {-1, 0}, {0, -1}}) {
+    link.push_back({x, y, plane(x, y)});
+  }
+  const Star star{{0, 0, plane(0, 0)}, link.data(), link.size(), true};
+  CHECK(dpts::core::vp_volume_exact(star, kSplit02) == Approx(0.0).margin(1e-12));
+  CHECK(dpts::core::vp_volume_monte_carlo(star, kSplit02, 1000, 7) == 0.0);
+}
+
+TEST_CASE("VP of a pyramid apex is the pyramid's volume", "[core][importance][vp]") {
+  // Apex at height h over a flat square of area 2: volume = 2 h / 3.
+  const double h = 3.0;
+  const auto link = square_link(0, 0, 0, 0);
+  const Star star{{0, 0, h}, link.data(), link.size(), true};
+  CHECK(dpts::core::vp_volume_exact(star, kSplit02) == Approx(2.0 * h / 3.0).epsilon(1e-12));
+  // The paper's Monte Carlo estimate converges to the same value.
+  CHECK(dpts::core::vp_volume_monte_carlo(star, kSplit02, 200000, 11) ==
+        Approx(2.0 * h / 3.0).epsilon(0.02));
+}
+
+TEST_CASE("VP integrates |difference| where the surfaces cross", "[core][importance][vp]") {
+  // Link heights +1, -1, +1, -1 round an apex at 0: the fan is z = |x| - |y|; refilled along
+  // link 0-2 it becomes z = 1 - 2|y|. The difference |x| + |y| - 1 is <= 0 on the diamond, so
+  // the volume is the integral of 1 - |x| - |y|: 1/6 per quadrant, 2/3 in all.
+  const auto link = square_link(1, -1, 1, -1);
+  const Star star{{0, 0, 0}, link.data(), link.size(), true};
+  const double exact = dpts::core::vp_volume_exact(star, kSplit02);
+  // An independent computation: a dense Monte Carlo estimate.
+  CHECK(dpts::core::vp_volume_monte_carlo(star, kSplit02, 400000, 3) == Approx(exact).epsilon(0.02));
+  CHECK(exact == Approx(2.0 / 3.0).epsilon(1e-12));
+}
+
+TEST_CASE("Monte Carlo VP is deterministic for a seed", "[core][importance][vp]") {
+  const auto link = square_link(0.5, 0, 0.2, 0);
+  const Star star{{0, 0, 1}, link.data(), link.size(), true};
+  CHECK(dpts::core::vp_volume_monte_carlo(star, kSplit02, 100, 42) ==
+        dpts::core::vp_volume_monte_carlo(star, kSplit02, 100, 42));
+}
+
+TEST_CASE("PLD importance is 0 on a plane with a convex link", "[core][importance][pld]") {
+  const auto link = square_link(0, 0, 0, 0);
+  const Star star{{0, 0, 0}, link.data(), link.size(), true};
+  CHECK(dpts::core::pld_importance(star) == Approx(0.0).margin(1e-12));
+}
+
+TEST_CASE("PLD of a pyramid apex matches the unfolded geodesic", "[core][importance][pld]") {
+  // Apex height 1 over the square link: opposite link vertices are 2 apart; the fan unfolds
+  // to two faces of 60 degrees each at the apex with edges sqrt(2), so GD = sqrt(6).
+  const auto link = square_link(0, 0, 0, 0);
+  const Star star{{0, 0, 1}, link.data(), link.size(), true};
+  CHECK(dpts::core::pld_importance(star) == Approx(1.0 - 2.0 / std::sqrt(6.0)).epsilon(1e-12));
+}
+
+TEST_CASE("PLD goes round a link vertex that pokes towards the apex", "[core][importance][pld]") {
+  // Flat star whose link vertex 1 sits close to the apex: the straight segment from link 0
+  // to link 2 leaves the fan, so the path bends at link 1.
+  std::vector<Point3> link = {{1, 0, 0}, {0.1, 0.1, 0}, {0, 1, 0}, {-1, -1, 0}};
+  const Star star{{0, 0, 0}, link.data(), link.size(), true};
+  const double bent = std::hypot(0.9, 0.1) + std::hypot(0.1, 0.9);
+  // Pairs (0,2): ED sqrt(2) over GD = min(bent, other way round); the other way round
+  // passes the apex side: 0 -> 3 -> 2 is a fan of angle 270 degrees, so it goes via the apex
+  // with length 2.
+  const double ratio02 = std::sqrt(2.0) / std::min(bent, 2.0);
+  // Pair (1,3): ED = sqrt(1.1^2 * 2), via the apex (180 degrees both ways) = 0.1*sqrt2 + sqrt2.
+  const double ratio13 = std::sqrt(2 * 1.1 * 1.1) / (0.1 * std::sqrt(2.0) + std::sqrt(2.0));
+  CHECK(dpts::core::pld_importance(star) == Approx(1.0 - std::min(ratio02, ratio13)).epsilon(1e-12));
+}

@@ -1,0 +1,45 @@
+// The indexed heap pops in (key, id) order whatever the updates.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <random>
+#include <vector>
+
+#include "core/indexed_heap.hpp"
+
+TEST_CASE("IndexedMinHeap pops by key, ties by id, after updates and erasures", "[core][heap]") {
+  const std::uint32_t n = 500;
+  dpts::core::IndexedMinHeap heap(n);
+  std::mt19937 rng(5);
+  std::vector<double> key(n);
+  std::vector<bool> present(n, false);
+  std::vector<std::uint32_t> ids;
+  std::vector<double> keys;
+  for (std::uint32_t i = 0; i < n; i += 2) {
+    key[i] = static_cast<double>(rng() % 50);  // many ties
+    ids.push_back(i), keys.push_back(key[i]), present[i] = true;
+  }
+  heap.assign(ids, keys);
+  for (int step = 0; step < 2000; ++step) {
+    const std::uint32_t id = rng() % n;
+    if (rng() % 4 == 0) {
+      heap.erase(id);
+      present[id] = false;
+    } else {
+      key[id] = static_cast<double>(rng() % 50);
+      heap.set(id, key[id]);
+      present[id] = true;
+    }
+  }
+  std::vector<std::pair<double, std::uint32_t>> expected;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (present[i]) expected.emplace_back(key[i], i);
+  }
+  std::sort(expected.begin(), expected.end());
+  REQUIRE(heap.size() == expected.size());
+  for (const auto& e : expected) {
+    REQUIRE(heap.top_key() == e.first);
+    REQUIRE(heap.pop() == e.second);
+  }
+  CHECK(heap.empty());
+}

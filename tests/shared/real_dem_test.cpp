@@ -1,0 +1,73 @@
+// The engine on real DEMs from ../shared/data (built only when that folder exists).
+#include <catch2/catch.hpp>
+
+#include <gdal_priv.h>
+
+#include <cmath>
+
+#include "core/footprint.hpp"
+#include "core/mesh_check.hpp"
+#include "io/dem_reader.hpp"
+#include "parallel/simplify.hpp"
+#include "test_support.hpp"
+
+using namespace dpts;
+
+namespace {
+
+struct Result {
+  io::Dem dem;
+  core::Tin tin;
+  par::SimplifyStats stats;
+};
+
+Result simplify_file(const std::string& name, core::Importance kind, double percent) {
+  GDALAllRegister();
+  Result r{io::read_dem(test::shared_data(name), {}, nullptr), {}, {}};
+  core::EliminationOptions opt;
+  opt.importance = kind;
+  par::KeepTarget target;
+  target.percent = percent;
+  r.tin = par::simplify_dem(r.dem.grid, r.dem.frame, opt, target, nullptr, &r.stats);
+  return r;
+}
+
+}  // namespace
+
+TEST_CASE("St Helens at 10 %: exact count, counter-clockwise faces, footprint covered once",
+          "[shared][simplify]") {
+  const auto kind = GENERATE(core::Importance::vp, core::Importance::pld);
+  const Result r = simplify_file("st_helens_crater.tif", kind, 10.0);
+  CHECK(r.stats.input_vertices == 128 * 128);
+  CHECK(r.tin.cells.size() == 1638);  // round(0.1 x 16384)
+  const auto xy = r.dem.output_xy(r.tin.cells);
+  const core::MeshCheck mc = core::check_mesh(xy, r.tin.faces);
+  CHECK(mc.clockwise_or_flat == 0);
+  CHECK(mc.bad_edges == 0);
+  // The cell-centre rectangle: 127 x 127 cells of 30 m.
+  CHECK(mc.area == Approx(127.0 * 30 * 127 * 30).epsilon(1e-12));
+}
+
+TEST_CASE("Andorra SRTM voids stay open and the output is in UTM metres", "[shared][simplify]") {
+  const Result r = simplify_file("pyrenees_andorra_voids.tif", core::Importance::vp, 10.0);
+  CHECK(r.dem.output_crs_name.find("32631") != std::string::npos);
+  CHECK(core::faces_over_nodata(r.dem.grid, test::grid_xy(r.dem.grid, r.tin), r.tin.faces) == 0);
+  const auto xy = r.dem.output_xy(r.tin.cells);
+  const core::MeshCheck mc = core::check_mesh(xy, r.tin.faces);
+  CHECK(mc.clockwise_or_flat == 0);
+  CHECK(mc.bad_edges == 0);
+  // Metres, not degrees: cells of about 68 m (east-west at 42.7N) in UTM zone 31N.
+  CHECK(r.dem.frame.metres_per_unit == Approx(68.1).epsilon(0.01));
+  for (std::size_t i = 0; i < xy.size(); i += 2) {
+    CHECK((xy[i] > 300000 && xy[i] < 400000 && xy[i + 1] > 4.70e6 && xy[i + 1] < 4.75e6));
+  }
+}
+
+TEST_CASE("Kilauea's salt-and-pepper sea voids stay open", "[shared][simplify][.slow]") {
+  const Result r = simplify_file("kilauea_utm5.tif", core::Importance::vp, 10.0);
+  CHECK(core::faces_over_nodata(r.dem.grid, test::grid_xy(r.dem.grid, r.tin), r.tin.faces) == 0);
+  const core::MeshCheck mc = core::check_mesh(r.dem.output_xy(r.tin.cells), r.tin.faces);
+  CHECK(mc.clockwise_or_flat == 0);
+  CHECK(mc.bad_edges == 0);
+  CHECK(mc.area == Approx(core::footprint_area_cells(r.dem.grid) * 900.0).epsilon(1e-9));
+}
