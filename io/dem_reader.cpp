@@ -79,6 +79,29 @@ std::vector<double> Dem::output_xy(const std::vector<std::uint32_t>& cells) cons
   return xy;
 }
 
+std::vector<double> Dem::grid_xy(const std::vector<double>& output_xy) const {
+  const std::size_t n = output_xy.size() / 2;
+  std::vector<double> x(n), y(n);
+  for (std::size_t i = 0; i < n; ++i) x[i] = output_xy[2 * i], y[i] = output_xy[2 * i + 1];
+  if (from_output) {
+    std::vector<int> ok(n, 0);
+    if (n > 0 && (!from_output->Transform(static_cast<int>(n), x.data(), y.data(), nullptr, ok.data()) ||
+                  std::find(ok.begin(), ok.end(), 0) != ok.end())) {
+      throw IoError(path + ": cannot transform points from " + output_crs_name + " to the DEM's CRS");
+    }
+  }
+  // Invert the geotransform: (x - gt0, y - gt3) = A (col + 0.5, row + 0.5).
+  const double* gt = geotransform;
+  const double det = gt[1] * gt[5] - gt[2] * gt[4];
+  std::vector<double> grid(2 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double dx = x[i] - gt[0], dy = y[i] - gt[3];
+    grid[2 * i] = (gt[5] * dx - gt[2] * dy) / det - 0.5;
+    grid[2 * i + 1] = (-gt[4] * dx + gt[1] * dy) / det - 0.5;
+  }
+  return grid;
+}
+
 Dem read_dem(const std::string& path, const DemReadOptions& options,
              const core::Progress& progress) {
   Dem dem;
@@ -155,7 +178,8 @@ Dem read_dem(const std::string& path, const DemReadOptions& options,
     const double unit_m = dst.IsProjected() ? dst.GetLinearUnits() : 1.0;
     if (transform) {
       dem.to_output.reset(OGRCreateCoordinateTransformation(&src, &dst));
-      if (!dem.to_output) {
+      dem.from_output.reset(OGRCreateCoordinateTransformation(&dst, &src));
+      if (!dem.to_output || !dem.from_output) {
         throw InputError(path + ": cannot transform " + crs_name(src) + " to " +
                          dem.output_crs_name + " (" + last_gdal_error() + ")");
       }

@@ -38,6 +38,12 @@ struct Dem {
   // Cell centres of the given cells (row-major indices) in the output CRS: x0, y0, x1, ...
   // Throws IoError if the CRS transformation fails.
   std::vector<double> output_xy(const std::vector<std::uint32_t>& cells) const;
+
+  // Grid positions (col, row; cell centres at integers) of points given in the output CRS:
+  // the inverse of output_xy. Throws IoError if the CRS transformation fails.
+  std::vector<double> grid_xy(const std::vector<double>& output_xy) const;
+
+  std::unique_ptr<OGRCoordinateTransformation, TransformDeleter> from_output;  // null: identity
 };
 
 // Reads band 1 of `path`. No-data cells, NaN and infinite heights become NaN. Checks the
