@@ -71,3 +71,22 @@ TEST_CASE("Kilauea's salt-and-pepper sea voids stay open", "[shared][simplify][.
   CHECK(mc.bad_edges == 0);
   CHECK(mc.area == Approx(core::footprint_area_cells(r.dem.grid) * 900.0).epsilon(1e-9));
 }
+
+#include "support/exact_geodesic.hpp"
+#include "parallel/evaluate.hpp"
+
+TEST_CASE("Steiner distances on real 50 x 50 crops: within 1 % of exact on average, never below",
+          "[shared][geodesic][exact]") {
+  struct Crop {
+    const char* file;
+    int c0, r0;
+  };
+  for (const Crop c : {Crop{"st_helens_crater.tif", 39, 39}, Crop{"san_gabriel_bigtujunga_utm11.tif", 600, 300}}) {
+    INFO(c.file);
+    const auto mesh = test::dem_crop(test::shared_data(c.file), c.c0, c.r0, 50);
+    const double delta = par::kDefaultDeltaFactor * core::mean_edge_length(mesh);
+    const auto fig = test::steiner_accuracy(mesh, delta, 4, 25, 7);
+    CHECK(fig.min_rel > -1e-9);
+    CHECK(fig.mean_rel < 0.01);
+  }
+}

@@ -1,0 +1,259 @@
+// dpts-eval: how well does a TIN preserve the surface distances of the DEM it came from?
+// Thin: parse flags, read the DEM and the mesh, call the evaluator, report.
+#include <cpl_conv.h>
+#include <cpl_error.h>
+#include <gdal_priv.h>
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+
+#include "core/errors.hpp"
+#include "core/footprint.hpp"
+#include "core/mesh_check.hpp"
+#include "core/surface_sampling.hpp"
+#include "io/dem_reader.hpp"
+#include "io/ply.hpp"
+#include "parallel/evaluate.hpp"
+
+namespace {
+
+using dpts::UsageError;
+
+struct Options {
+  std::string dem, mesh, t_srs;
+  dpts::par::EvalOptions eval;
+  double snap_m = -1;  // < 0: default
+  int threads = 0;
+  bool json = false, quiet = false, help = false, version = false;
+};
+
+const char* kHelp = R"(usage: dpts-eval --dem DEM --mesh MESH.ply [options]
+
+Measures how well a TIN preserves the surface (geodesic) distances of the DEM it was made
+from (Ben-Moshe et al.): for K random points uniform in the DEM's valid footprint, the error
+is the mean over all pairs of |GD_T - GD_T'| / GD_T, where T is the DEM's full-resolution
+grid TIN and T' the mesh, and geodesics are shortest paths on the Steiner graph (points every
+delta along edges, each triangle's boundary points pairwise connected). The result is the
+mean over independent sets. Also reports the mesh's validity over the DEM (orientation,
+coverage, faces over no-data) and its vertical error at every valid cell centre.
+
+  --dem DEM          the original DEM (any raster GDAL reads; band 1)
+  --mesh MESH.ply    the TIN: any PLY with vertex x, y, z and triangle faces, in the same
+                     CRS as dpts-par writes for DEM (see --t-srs)
+  --points K         points per set (default 100)
+  --sets S           independent sets (default 3)
+  --seed N           seed of the sample points (default 1)
+  --delta D          Steiner spacing in metres (default: 0.25 x the mean edge length of T,
+                     which keeps Steiner distances within 1 % of exact geodesics on average)
+  --snap M           points outside the mesh by at most M metres are moved onto it
+                     (default 0, or half a cell when the DEM is reprojected)
+  --t-srs CRS        the mesh's CRS when dpts-par was given --t-srs
+  --threads N        worker threads (default: all cores)
+  --json             print one JSON object with all figures as the last line
+  --quiet            only the JSON line (or nothing but errors)
+  --help, --version
+Exit status: 0 ok, 1 failure (bad input, points outside the mesh), 2 bad usage.
+)";
+
+template <typename T>
+T number(const std::string& flag, const std::string& text, T min, const char* expected) {
+  T v{};
+  const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (r.ec != std::errc() || r.ptr != text.data() + text.size() || !(v >= min)) {
+    throw UsageError(flag + " " + text + ": expected " + expected);
+  }
+  return v;
+}
+
+Options parse(const std::vector<std::string>& args) {
+  Options o;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= args.size()) throw UsageError(a + ": missing value");
+      return args[++i];
+    };
+    if (a == "--help" || a == "-h") {
+      o.help = true;
+    } else if (a == "--version") {
+      o.version = true;
+    } else if (a == "--dem") {
+      o.dem = value();
+    } else if (a == "--mesh") {
+      o.mesh = value();
+    } else if (a == "--points") {
+      o.eval.points = number<int>(a, value(), 2, "an integer >= 2");
+    } else if (a == "--sets") {
+      o.eval.sets = number<int>(a, value(), 1, "an integer >= 1");
+    } else if (a == "--seed") {
+      o.eval.seed = number<std::uint64_t>(a, value(), 0, "a non-negative integer");
+    } else if (a == "--delta") {
+      o.eval.delta_m = number<double>(a, value(), 1e-9, "a length in metres > 0");
+    } else if (a == "--snap") {
+      o.snap_m = number<double>(a, value(), 0.0, "a length in metres >= 0");
+    } else if (a == "--t-srs") {
+      o.t_srs = value();
+    } else if (a == "--threads") {
+      o.threads = number<int>(a, value(), 1, "an integer >= 1");
+    } else if (a == "--json") {
+      o.json = true;
+    } else if (a == "--quiet" || a == "-q") {
+      o.quiet = true;
+    } else {
+      throw UsageError(a + (a.rfind("-", 0) == 0 ? ": unknown option" : ": unexpected argument"));
+    }
+  }
+  if (!o.help && !o.version && (o.dem.empty() || o.mesh.empty())) {
+    throw UsageError("expected --dem DEM and --mesh MESH.ply");
+  }
+  return o;
+}
+
+std::string json_number(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+std::string json_string(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) {
+      out += ' ';
+      continue;
+    }
+    out += c;
+  }
+  return out + "\"";
+}
+
+int run(const Options& o) {
+  using namespace dpts;
+  if (o.help) {
+    std::cout << kHelp;
+    return 0;
+  }
+  if (o.version) {
+    std::cout << "dpts-eval " << DPTS_VERSION << "\n";
+    return 0;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
+  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
+                                  static_cast<std::size_t>(threads));
+  const io::Dem dem = io::read_dem(o.dem, io::DemReadOptions{o.t_srs}, nullptr);
+
+  // T: the DEM's full-resolution grid TIN, in the output CRS dpts-par uses.
+  const core::GridTin grid = core::grid_tin(dem.grid);
+  if (grid.faces.empty()) throw InputError(o.dem + ": no three neighbouring valid cells");
+  core::TriMesh t;
+  {
+    const auto xy = dem.output_xy(grid.cells);
+    t.xyz.resize(3 * grid.cells.size());
+    for (std::size_t i = 0; i < grid.cells.size(); ++i) {
+      t.xyz[3 * i] = xy[2 * i], t.xyz[3 * i + 1] = xy[2 * i + 1], t.xyz[3 * i + 2] = dem.grid.z[grid.cells[i]];
+    }
+    t.faces = grid.faces;
+    core::fix_orientation(t);
+  }
+  // T': the mesh.
+  io::Mesh ply = io::read_ply_file(o.mesh);
+  if (ply.faces.empty()) throw InputError(o.mesh + ": has no faces");
+  for (double v : ply.xyz) {
+    if (!std::isfinite(v)) throw InputError(o.mesh + ": has a non-finite vertex coordinate");
+  }
+  core::TriMesh s{std::move(ply.xyz), std::move(ply.faces)};
+
+  // Validity of T' over the DEM.
+  std::vector<double> s_xy(2 * s.vertex_count());
+  for (std::size_t v = 0; v < s.vertex_count(); ++v) s_xy[2 * v] = s.xyz[3 * v], s_xy[2 * v + 1] = s.xyz[3 * v + 1];
+  const core::MeshCheck mc = core::check_mesh(s_xy, s.faces);
+  std::vector<double> t_xy(2 * t.vertex_count());
+  for (std::size_t v = 0; v < t.vertex_count(); ++v) t_xy[2 * v] = t.xyz[3 * v], t_xy[2 * v + 1] = t.xyz[3 * v + 1];
+  const double footprint_area = core::check_mesh(t_xy, t.faces).area;
+  const double tol = dem.to_output ? 0.01 : 1e-6;  // cells; reprojection rounding
+  const std::size_t over_nodata = core::faces_over_nodata(dem.grid, dem.grid_xy(s_xy), s.faces, tol);
+
+  // Vertical error at every cell centre of T's footprint.
+  const core::PointLocator locate_s(s);
+  const double snap = o.snap_m >= 0 ? o.snap_m : (dem.to_output ? 0.5 * dem.frame.metres_per_unit : 0.0);
+  double sq = 0, vmax = 0;
+  std::size_t measured = 0, uncovered = 0;
+  for (std::size_t v = 0; v < t.vertex_count(); ++v) {
+    const auto hit = locate_s.locate(t.xyz[3 * v], t.xyz[3 * v + 1], snap);
+    if (!hit) {
+      ++uncovered;
+      continue;
+    }
+    const double dz = hit->point.z - t.xyz[3 * v + 2];
+    sq += dz * dz;
+    vmax = std::max(vmax, std::fabs(dz));
+    ++measured;
+  }
+
+  par::EvalOptions eo = o.eval;
+  eo.snap_m = snap;
+  const par::EvalResult r = par::evaluate_distances(t, s, eo);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double rmse = measured ? std::sqrt(sq / measured) : 0.0;
+
+  if (!o.quiet) {
+    std::printf("dem              %s: %zu vertices, %zu faces (grid TIN)\n", o.dem.c_str(), t.vertex_count(), t.faces.size());
+    std::printf("mesh             %s: %zu vertices, %zu faces\n", o.mesh.c_str(), s.vertex_count(), s.faces.size());
+    std::printf("validity         %zu faces not counter-clockwise, %zu bad edges, %zu faces over no-data\n",
+                mc.clockwise_or_flat, mc.bad_edges, over_nodata);
+    std::printf("coverage         mesh area / footprint area = %.9f\n", mc.area / footprint_area);
+    std::printf("vertical error   RMSE %.4f m, max %.4f m over %zu cell centres (%zu outside the mesh)\n",
+                rmse, vmax, measured, uncovered);
+    std::printf("steiner graphs   delta %.4f m: T %zu nodes, T' %zu nodes\n", r.delta_m, r.original_nodes, r.simplified_nodes);
+    for (std::size_t i = 0; i < r.set_errors.size(); ++i) {
+      std::printf("distance error   set %zu: %.6f\n", i + 1, r.set_errors[i]);
+    }
+    std::printf("distance error   %.6f (mean of %d sets of %d points; %zu points snapped)\n",
+                r.distance_error, eo.sets, eo.points, r.snapped);
+    std::printf("time             %.2f s\n", secs);
+  }
+  if (o.json) {
+    std::ostringstream js;
+    js << "{\"distance_error\":" << json_number(r.distance_error) << ",\"distance_error_sets\":[";
+    for (std::size_t i = 0; i < r.set_errors.size(); ++i) js << (i ? "," : "") << json_number(r.set_errors[i]);
+    js << "],\"vertical_rmse\":" << json_number(rmse) << ",\"vertical_max\":" << json_number(vmax)
+       << ",\"mesh_vertices\":" << s.vertex_count() << ",\"mesh_faces\":" << s.faces.size()
+       << ",\"dem_vertices\":" << t.vertex_count() << ",\"dem_faces\":" << t.faces.size()
+       << ",\"points\":" << eo.points << ",\"sets\":" << eo.sets << ",\"seed\":" << eo.seed
+       << ",\"delta_m\":" << json_number(r.delta_m) << ",\"steiner_nodes_dem\":" << r.original_nodes
+       << ",\"steiner_nodes_mesh\":" << r.simplified_nodes << ",\"snapped_points\":" << r.snapped
+       << ",\"faces_not_ccw\":" << mc.clockwise_or_flat << ",\"bad_edges\":" << mc.bad_edges
+       << ",\"faces_over_nodata\":" << over_nodata << ",\"coverage\":" << json_number(mc.area / footprint_area)
+       << ",\"cells_outside_mesh\":" << uncovered << ",\"threads\":" << threads
+       << ",\"dem\":" << json_string(o.dem) << ",\"mesh\":" << json_string(o.mesh)
+       << ",\"seconds\":" << json_number(secs) << "}";
+    std::cout << js.str() << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  GDALAllRegister();
+  CPLPushErrorHandler(CPLQuietErrorHandler);
+  if (!CPLGetConfigOption("GDAL_CACHEMAX", nullptr)) CPLSetConfigOption("GDAL_CACHEMAX", "64");
+  try {
+    return run(parse(std::vector<std::string>(argv + 1, argv + argc)));
+  } catch (const dpts::UsageError& e) {
+    std::cerr << "dpts-eval: " << e.what() << "\nTry 'dpts-eval --help' for more information.\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "dpts-eval: error: " << e.what() << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,107 @@
+// Geodesic distances on a TIN approximated on the Steiner graph of Ben-Moshe et al.,
+// "Distance Preserving Terrain Simplification", section 2.1: floor(len(e)/delta) points inside
+// every edge e, and inside every triangle a straight segment between every pair of points on its
+// boundary (corners included). The graph is implicit: a triangle's clique is generated when
+// Dijkstra reaches it, so memory is linear in the number of Steiner points.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace dpts::core {
+
+// A triangle mesh in metres: x, y in a metric CRS, z height. Faces counter-clockwise.
+struct TriMesh {
+  std::vector<double> xyz;
+  std::vector<std::array<std::uint32_t, 3>> faces;
+  std::size_t vertex_count() const { return xyz.size() / 3; }
+};
+
+// Mean 3D length of the mesh's edges (each undirected edge once).
+double mean_edge_length(const TriMesh& mesh);
+
+// A point on a mesh: position (z lifted onto the face) and the face it lies in.
+struct SurfacePoint {
+  double x = 0, y = 0, z = 0;
+  std::uint32_t face = 0;
+};
+
+class SteinerGraph {
+ public:
+  // Builds edges, face adjacency and Steiner point positions. Throws std::invalid_argument if
+  // an edge has more than two faces or delta is not positive. The mesh must outlive the graph.
+  SteinerGraph(const TriMesh& mesh, double delta);
+
+  const TriMesh& mesh() const { return mesh_; }
+  double delta() const { return delta_; }
+  std::size_t node_count() const { return pos_.size() / 3; }
+  std::size_t steiner_count() const { return node_count() - mesh_.vertex_count(); }
+  const double* position(std::uint32_t node) const { return &pos_[3 * node]; }
+
+  // The nodes on face f's boundary (its corners and its edges' Steiner points), into out.
+  void face_nodes(std::uint32_t f, std::vector<std::uint32_t>& out) const;
+  // The faces a node lies on: a corner's incident faces, or an edge point's one or two faces.
+  template <typename Fn>
+  void for_each_face(std::uint32_t node, Fn&& fn) const {
+    if (node < mesh_.vertex_count()) {
+      for (std::uint32_t k = vertex_face_first_[node]; k < vertex_face_first_[node + 1]; ++k) fn(vertex_faces_[k]);
+    } else {
+      const auto& ef = edge_faces_[node_edge_[node - mesh_.vertex_count()]];
+      fn(ef[0]);
+      if (ef[1] != kNoFace) fn(ef[1]);
+    }
+  }
+
+  static constexpr std::uint32_t kNoFace = 0xFFFFFFFFu;
+
+ private:
+  const TriMesh& mesh_;
+  double delta_;
+  std::vector<double> pos_;                             // node positions, vertices first
+  std::vector<std::array<std::uint32_t, 3>> face_edges_;  // edge of (v0,v1), (v1,v2), (v2,v0)
+  std::vector<std::array<std::uint32_t, 2>> edge_faces_;
+  std::vector<std::uint32_t> edge_first_;               // first Steiner node of each edge, + end
+  std::vector<std::uint32_t> node_edge_;                // Steiner node - vertex_count -> edge
+  std::vector<std::uint32_t> vertex_face_first_, vertex_faces_;  // CSR vertex -> faces
+};
+
+// A monotone priority queue for Dijkstra (radix heap): keys are non-negative doubles whose
+// bit patterns order like the values; every key pushed is >= the last key popped.
+class RadixHeap {
+ public:
+  bool empty() const { return size_ == 0; }
+  void clear();
+  void push(double key, std::uint32_t value);
+  std::pair<double, std::uint32_t> pop();
+
+ private:
+  static int bucket(std::uint64_t key, std::uint64_t last);
+  std::array<std::vector<std::pair<std::uint64_t, std::uint32_t>>, 65> buckets_;
+  std::uint64_t last_ = 0;
+  std::size_t size_ = 0;
+};
+
+// Dijkstra on a SteinerGraph from one surface point to many. Holds per-query scratch memory:
+// one per thread; the graph is shared read-only.
+class GeodesicQuery {
+ public:
+  explicit GeodesicQuery(const SteinerGraph& graph);
+
+  // Distances from source to each target: min over boundary nodes u of the source's face and
+  // v of the target's face of |source u| + path(u, v) + |v target| (and the straight segment
+  // when both lie in one face). Stops as soon as every target is settled.
+  void distances(const SurfacePoint& source, const std::vector<SurfacePoint>& targets,
+                 std::vector<double>& out);
+
+ private:
+  const SteinerGraph& g_;
+  std::vector<double> dist_;
+  RadixHeap heap_;
+  std::vector<std::int32_t> face_target_head_;  // first target in a face, -1: none
+  std::vector<std::int32_t> target_next_;
+  std::vector<std::uint32_t> nodes_;
+};
+
+}  // namespace dpts::core

@@ -1,0 +1,193 @@
+// Grid TIN construction, uniform sampling on a TIN, bucket-grid point location.
+#include "core/surface_sampling.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/footprint.hpp"
+
+namespace dpts::core {
+namespace {
+
+struct SplitMix {
+  std::uint64_t state;
+  std::uint64_t next() {
+    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
+};
+
+double cross2(const double* a, const double* b, const double* c) {
+  return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+}
+
+// Barycentric lift of (x, y) onto face f.
+SurfacePoint lift(const TriMesh& m, std::uint32_t f, double x, double y) {
+  const double* a = &m.xyz[3 * m.faces[f][0]];
+  const double* b = &m.xyz[3 * m.faces[f][1]];
+  const double* c = &m.xyz[3 * m.faces[f][2]];
+  const double p[2] = {x, y};
+  const double area = cross2(a, b, c);
+  const double la = cross2(b, c, p) / area, lb = cross2(c, a, p) / area;
+  const double lc = 1.0 - la - lb;
+  return {x, y, la * a[2] + lb * b[2] + lc * c[2], f};
+}
+
+// Squared distance in x, y from p to segment a-b.
+double segment_dist2(const double* p, const double* a, const double* b) {
+  const double dx = b[0] - a[0], dy = b[1] - a[1];
+  const double len2 = dx * dx + dy * dy;
+  double t = len2 > 0 ? ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2 : 0.0;
+  t = std::clamp(t, 0.0, 1.0);
+  const double ex = a[0] + t * dx - p[0], ey = a[1] + t * dy - p[1];
+  return ex * ex + ey * ey;
+}
+
+}  // namespace
+
+GridTin grid_tin(const HeightGrid& g) {
+  GridTin t;
+  t.cells = surface_cells(g);
+  // Surface cell -> vertex index.
+  std::vector<std::uint32_t> index(g.cell_count(), 0xFFFFFFFFu);
+  for (std::uint32_t i = 0; i < t.cells.size(); ++i) index[t.cells[i]] = i;
+  for (int r = 0; r + 1 < g.height; ++r) {
+    for (int c = 0; c + 1 < g.width; ++c) {
+      // Corners: a = (c,r) NW, b = (c+1,r) NE, s = (c,r+1) SW, d = (c+1,r+1) SE.
+      const bool va = g.is_valid(c, r), vb = g.is_valid(c + 1, r);
+      const bool vs = g.is_valid(c, r + 1), vd = g.is_valid(c + 1, r + 1);
+      const std::uint32_t a = index[g.index(c, r)], b = index[g.index(c + 1, r)];
+      const std::uint32_t s = index[g.index(c, r + 1)], d = index[g.index(c + 1, r + 1)];
+      const int n = va + vb + vs + vd;
+      if (n == 4) {
+        t.faces.push_back({a, s, d});
+        t.faces.push_back({a, d, b});
+      } else if (n == 3) {
+        if (!va) t.faces.push_back({b, s, d});
+        if (!vb) t.faces.push_back({a, s, d});
+        if (!vs) t.faces.push_back({a, d, b});
+        if (!vd) t.faces.push_back({a, s, b});
+      }
+    }
+  }
+  return t;
+}
+
+void fix_orientation(TriMesh& m) {
+  for (auto& f : m.faces) {
+    if (cross2(&m.xyz[3 * f[0]], &m.xyz[3 * f[1]], &m.xyz[3 * f[2]]) < 0) std::swap(f[1], f[2]);
+  }
+}
+
+std::vector<SurfacePoint> sample_uniform(const TriMesh& m, std::size_t count, std::uint64_t seed) {
+  std::vector<double> cdf(m.faces.size());
+  double total = 0.0;
+  for (std::size_t f = 0; f < m.faces.size(); ++f) {
+    total += 0.5 * std::fabs(cross2(&m.xyz[3 * m.faces[f][0]], &m.xyz[3 * m.faces[f][1]],
+                                    &m.xyz[3 * m.faces[f][2]]));
+    cdf[f] = total;
+  }
+  SplitMix rng{seed};
+  std::vector<SurfacePoint> pts;
+  for (std::size_t k = 0; k < count && total > 0; ++k) {
+    const double u = rng.uniform() * total;
+    const auto f = static_cast<std::uint32_t>(
+        std::min<std::size_t>(std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin(), cdf.size() - 1));
+    // Uniform in the triangle: reflect the unit square's upper half.
+    double r1 = rng.uniform(), r2 = rng.uniform();
+    if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
+    const double* a = &m.xyz[3 * m.faces[f][0]];
+    const double* b = &m.xyz[3 * m.faces[f][1]];
+    const double* c = &m.xyz[3 * m.faces[f][2]];
+    const double x = a[0] + r1 * (b[0] - a[0]) + r2 * (c[0] - a[0]);
+    const double y = a[1] + r1 * (b[1] - a[1]) + r2 * (c[1] - a[1]);
+    pts.push_back(lift(m, f, x, y));
+  }
+  return pts;
+}
+
+PointLocator::PointLocator(const TriMesh& mesh) : mesh_(mesh) {
+  double x1 = -std::numeric_limits<double>::infinity(), y1 = x1;
+  x0_ = y0_ = std::numeric_limits<double>::infinity();
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+    x0_ = std::min(x0_, mesh.xyz[3 * v]), x1 = std::max(x1, mesh.xyz[3 * v]);
+    y0_ = std::min(y0_, mesh.xyz[3 * v + 1]), y1 = std::max(y1, mesh.xyz[3 * v + 1]);
+  }
+  if (mesh.faces.empty()) return;
+  // About two faces per bucket.
+  const double area = std::max((x1 - x0_) * (y1 - y0_), 1e-300);
+  cell_ = std::max(std::sqrt(2.0 * area / mesh.faces.size()), 1e-9);
+  nx_ = std::max(1, static_cast<int>(std::ceil((x1 - x0_) / cell_)) + 1);
+  ny_ = std::max(1, static_cast<int>(std::ceil((y1 - y0_) / cell_)) + 1);
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> entries;  // (bucket, face)
+  for (std::uint32_t f = 0; f < mesh.faces.size(); ++f) {
+    double fx0 = 1e300, fx1 = -1e300, fy0 = 1e300, fy1 = -1e300;
+    for (auto v : mesh.faces[f]) {
+      fx0 = std::min(fx0, mesh.xyz[3 * v]), fx1 = std::max(fx1, mesh.xyz[3 * v]);
+      fy0 = std::min(fy0, mesh.xyz[3 * v + 1]), fy1 = std::max(fy1, mesh.xyz[3 * v + 1]);
+    }
+    const int i0 = static_cast<int>((fx0 - x0_) / cell_), i1 = static_cast<int>((fx1 - x0_) / cell_);
+    const int j0 = static_cast<int>((fy0 - y0_) / cell_), j1 = static_cast<int>((fy1 - y0_) / cell_);
+    for (int j = j0; j <= j1; ++j) {
+      for (int i = i0; i <= i1; ++i) entries.emplace_back(static_cast<std::uint32_t>(j * nx_ + i), f);
+    }
+  }
+  std::sort(entries.begin(), entries.end());
+  first_.assign(static_cast<std::size_t>(nx_) * ny_ + 1, 0);
+  for (const auto& e : entries) ++first_[e.first + 1];
+  for (std::size_t b = 0; b + 1 < first_.size(); ++b) first_[b + 1] += first_[b];
+  faces_.reserve(entries.size());
+  for (const auto& e : entries) faces_.push_back(e.second);
+}
+
+std::optional<PointLocator::Hit> PointLocator::locate(double x, double y, double snap) const {
+  const double p[2] = {x, y};
+  const int reach = snap > 0 ? static_cast<int>(std::ceil(snap / cell_)) : 0;
+  const int ci = static_cast<int>(std::floor((x - x0_) / cell_));
+  const int cj = static_cast<int>(std::floor((y - y0_) / cell_));
+  double best_d2 = snap * snap;
+  std::optional<std::uint32_t> nearest;
+  for (int j = std::max(0, cj - reach); j <= std::min(ny_ - 1, cj + reach); ++j) {
+    for (int i = std::max(0, ci - reach); i <= std::min(nx_ - 1, ci + reach); ++i) {
+      const std::size_t b = static_cast<std::size_t>(j) * nx_ + i;
+      for (std::uint32_t k = first_[b]; k < first_[b + 1]; ++k) {
+        const std::uint32_t f = faces_[k];
+        const double* a = &mesh_.xyz[3 * mesh_.faces[f][0]];
+        const double* bb = &mesh_.xyz[3 * mesh_.faces[f][1]];
+        const double* c = &mesh_.xyz[3 * mesh_.faces[f][2]];
+        const double area = cross2(a, bb, c);
+        const double tol = -1e-12 * std::fabs(area);
+        if (i == ci && j == cj && cross2(a, bb, p) * (area > 0 ? 1 : -1) >= tol &&
+            cross2(bb, c, p) * (area > 0 ? 1 : -1) >= tol && cross2(c, a, p) * (area > 0 ? 1 : -1) >= tol) {
+          return Hit{lift(mesh_, f, x, y), false};
+        }
+        if (snap > 0) {
+          const double d2 = std::min({segment_dist2(p, a, bb), segment_dist2(p, bb, c), segment_dist2(p, c, a)});
+          if (d2 <= best_d2 && (!nearest || d2 < best_d2 || f < *nearest)) best_d2 = d2, nearest = f;
+        }
+      }
+    }
+  }
+  if (!nearest) return std::nullopt;
+  // Snap onto the nearest face: its closest point, then lift.
+  const auto& F = mesh_.faces[*nearest];
+  const double* q[3] = {&mesh_.xyz[3 * F[0]], &mesh_.xyz[3 * F[1]], &mesh_.xyz[3 * F[2]]};
+  double sx = x, sy = y, sd2 = std::numeric_limits<double>::infinity();
+  for (int e = 0; e < 3; ++e) {
+    const double* a = q[e];
+    const double* b = q[(e + 1) % 3];
+    const double dx = b[0] - a[0], dy = b[1] - a[1];
+    const double len2 = dx * dx + dy * dy;
+    const double t = len2 > 0 ? std::clamp(((x - a[0]) * dx + (y - a[1]) * dy) / len2, 0.0, 1.0) : 0.0;
+    const double px = a[0] + t * dx, py = a[1] + t * dy;
+    const double d2 = (px - x) * (px - x) + (py - y) * (py - y);
+    if (d2 < sd2) sd2 = d2, sx = px, sy = py;
+  }
+  return Hit{lift(mesh_, *nearest, sx, sy), true};
+}
+
+}  // namespace dpts::core

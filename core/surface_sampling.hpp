@@ -1,0 +1,50 @@
+// The DEM's full-resolution grid TIN, uniform sample points on a TIN, and point location.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "core/grid.hpp"
+#include "core/steiner_graph.hpp"
+
+namespace dpts::core {
+
+// The full-resolution TIN T of a DEM: every grid square with 4 valid corners split along its
+// NW-SE diagonal (row,col)-(row+1,col+1), every square with exactly 3 valid corners as that
+// triangle (the valid footprint, see footprint.hpp). This is also the Delaunay TIN the
+// elimination starts from. Vertices are the surface cells (ascending); faces index them, in
+// the grid's orientation (fix_orientation() makes them counter-clockwise in a given CRS).
+struct GridTin {
+  std::vector<std::uint32_t> cells;
+  std::vector<std::array<std::uint32_t, 3>> faces;
+};
+GridTin grid_tin(const HeightGrid& grid);
+
+// Reverses every face that is clockwise in mesh.xyz's x, y.
+void fix_orientation(TriMesh& mesh);
+
+// `count` points uniform in the area of the mesh (in x, y), seeded; z lifted onto the mesh.
+std::vector<SurfacePoint> sample_uniform(const TriMesh& mesh, std::size_t count, std::uint64_t seed);
+
+// Locates points in a mesh's faces (in x, y) with a bucket grid.
+class PointLocator {
+ public:
+  explicit PointLocator(const TriMesh& mesh);
+  // The lowest-numbered face containing (x, y) (edges included, up to rounding), lifted; or,
+  // when none does, the nearest face if (x, y) lies within `snap` of it, flagged as snapped.
+  struct Hit {
+    SurfacePoint point;
+    bool snapped = false;
+  };
+  std::optional<Hit> locate(double x, double y, double snap = 0.0) const;
+
+ private:
+  const TriMesh& mesh_;
+  double x0_ = 0, y0_ = 0, cell_ = 1;
+  int nx_ = 1, ny_ = 1;
+  std::vector<std::uint32_t> first_, faces_;  // CSR bucket -> faces
+};
+
+}  // namespace dpts::core

@@ -1,0 +1,43 @@
+// The distance-preserving error of a simplified TIN (Ben-Moshe et al., sections 2 and 5.3),
+// with geodesics on the Steiner graph computed by parallel Dijkstra queries (oneTBB).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/steiner_graph.hpp"
+
+namespace dpts::par {
+
+// Geodesic distances between all pairs of points on the graph's mesh: out[i * K + j] for
+// i < j (the rest 0). One sequential Dijkstra per source i (to the targets j > i), sources
+// spread over oneTBB tasks, scratch per thread: the figures are the same for any thread count.
+std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
+                                       const std::vector<core::SurfacePoint>& points);
+
+struct EvalOptions {
+  int points = 100;               // K points per set
+  int sets = 3;                   // independent sets
+  std::uint64_t seed = 1;
+  double delta_m = 0;             // Steiner spacing; 0: kDefaultDeltaFactor x mean edge of T
+  double snap_m = 0;              // points outside T' within this distance are snapped onto it
+};
+
+// Default Steiner spacing as a fraction of the mean 3D edge length of the original TIN.
+inline constexpr double kDefaultDeltaFactor = 0.25;
+
+struct EvalResult {
+  double distance_error = 0;          // mean of the set errors
+  std::vector<double> set_errors;     // per set: mean |GD_T - GD_T'| / GD_T over all pairs
+  double delta_m = 0;
+  std::size_t original_nodes = 0, simplified_nodes = 0;  // Steiner graph sizes
+  std::size_t snapped = 0;            // sample points snapped onto T'
+};
+
+// Samples K points uniformly in T's footprint per set (seeded by seed and set), lifts them onto
+// T and T', and compares all pairwise geodesics. Throws InputError when sample points fall
+// outside T' (farther than snap_m), with their count.
+EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh& simplified,
+                              const EvalOptions& options);
+
+}  // namespace dpts::par

@@ -1,0 +1,95 @@
+// Steiner-graph geodesics: structure, planar limit, never below the exact geodesic.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "core/steiner_graph.hpp"
+#include "core/surface_sampling.hpp"
+#include "support/exact_geodesic.hpp"
+#include "test_support.hpp"
+
+using namespace dpts;
+
+namespace {
+
+// The grid TIN of z = f(col, row) with `cell` metre cells.
+core::TriMesh grid_mesh(int w, int h, double cell, const std::function<double(int, int)>& f) {
+  const auto g = test::make_grid(w, h, f);
+  const auto t = core::grid_tin(g);
+  core::TriMesh m;
+  for (auto c : t.cells) {
+    m.xyz.insert(m.xyz.end(), {cell * (c % w), -cell * (c / w), g.z[c]});
+  }
+  m.faces = t.faces;
+  core::fix_orientation(m);
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("Steiner points: floor(len / delta) inside every edge", "[core][geodesic]") {
+  // One unit square split in two: 4 edges of length 1, a diagonal of sqrt(2).
+  core::TriMesh m;
+  m.xyz = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};
+  m.faces = {{0, 1, 3}, {0, 3, 2}};
+  const core::SteinerGraph g(m, 0.3);
+  // floor(1 / 0.3) = 3 per side, floor(1.414 / 0.3) = 4 on the diagonal.
+  CHECK(g.steiner_count() == 4 * 3 + 4);
+  std::vector<std::uint32_t> nodes;
+  g.face_nodes(0, nodes);
+  CHECK(nodes.size() == 3 + 3 + 3 + 4);
+  CHECK(core::mean_edge_length(m) == Approx((4 + std::sqrt(2.0)) / 5));
+}
+
+TEST_CASE("on a plane, Steiner distances approach the Euclidean distance as delta shrinks",
+          "[core][geodesic]") {
+  const auto m = grid_mesh(20, 20, 10.0, [](int c, int r) { return 3.0 * c - 2.0 * r; });
+  const auto pts = core::sample_uniform(m, 12, 3);
+  double previous = 1e9;
+  for (double delta : {10.0, 5.0, 2.5, 1.25}) {
+    const core::SteinerGraph g(m, delta);
+    core::GeodesicQuery q(g);
+    double sum = 0;
+    int n = 0;
+    std::vector<double> d;
+    for (std::size_t i = 0; i + 1 < pts.size(); ++i) {
+      std::vector<core::SurfacePoint> targets(pts.begin() + i + 1, pts.end());
+      q.distances(pts[i], targets, d);
+      for (std::size_t j = 0; j < targets.size(); ++j) {
+        const double e = std::sqrt(std::pow(pts[i].x - targets[j].x, 2) + std::pow(pts[i].y - targets[j].y, 2) +
+                                   std::pow(pts[i].z - targets[j].z, 2));
+        CHECK(d[j] >= e * (1 - 1e-12));  // never shorter than the straight line
+        sum += (d[j] - e) / e;
+        ++n;
+      }
+    }
+    const double mean = sum / n;
+    CHECK(mean < previous);
+    previous = mean;
+  }
+  CHECK(previous < 0.01);
+}
+
+TEST_CASE("two points in one face are joined by their straight segment", "[core][geodesic]") {
+  core::TriMesh m;
+  m.xyz = {0, 0, 0, 10, 0, 0, 0, 10, 0};
+  m.faces = {{0, 1, 2}};
+  const core::SteinerGraph g(m, 100.0);
+  core::GeodesicQuery q(g);
+  std::vector<double> d;
+  q.distances({1, 1, 0, 0}, {{4, 5, 0, 0}}, d);
+  CHECK(d[0] == Approx(5.0));
+}
+
+TEST_CASE("Steiner distances are never below the exact geodesic and within 1 % on average",
+          "[core][geodesic][exact]") {
+  // Rough synthetic hills, 30 x 30 cells of 30 m; CGAL's exact geodesics as reference.
+  const auto m = grid_mesh(30, 30, 30.0, [](int c, int r) {
+    return 40.0 * std::sin(c * 0.45) * std::cos(r * 0.35) + 15.0 * std::sin(c * 1.3 + r * 0.7);
+  });
+  const double delta = 0.25 * core::mean_edge_length(m);
+  const auto fig = test::steiner_accuracy(m, delta, 4, 20, 5);
+  CHECK(fig.pairs == 80);
+  CHECK(fig.min_rel > -1e-9);
+  CHECK(fig.mean_rel < 0.01);
+}

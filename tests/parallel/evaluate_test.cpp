@@ -1,0 +1,102 @@
+// The distance-preserving error: zero for identical meshes, same for any thread count.
+#include <catch2/catch.hpp>
+
+#include <tbb/global_control.h>
+
+#include <cmath>
+
+#include "core/errors.hpp"
+#include "core/surface_sampling.hpp"
+#include "parallel/evaluate.hpp"
+#include "parallel/simplify.hpp"
+#include "test_support.hpp"
+
+using namespace dpts;
+
+namespace {
+
+core::HeightGrid hills() {
+  return test::make_grid(36, 28, [](int c, int r) {
+    if (std::hypot(c - 20.0, r - 12.0) < 3.0) return std::nan("");
+    return 60.0 * std::sin(c * 0.3) * std::cos(r * 0.2) + 2.0 * r;
+  });
+}
+
+// A TIN over grid g in metres (10 m cells): the grid TIN, or a simplification of it.
+core::TriMesh to_mesh(const core::HeightGrid& g, const std::vector<std::uint32_t>& cells,
+                      const std::vector<std::array<std::uint32_t, 3>>& faces) {
+  core::TriMesh m;
+  for (auto c : cells) m.xyz.insert(m.xyz.end(), {10.0 * (c % g.width), -10.0 * (c / g.width), g.z[c]});
+  m.faces = faces;
+  core::fix_orientation(m);
+  return m;
+}
+
+core::TriMesh simplified(const core::HeightGrid& g, double percent) {
+  const double j[2][2] = {{10, 0}, {0, -10}};
+  par::KeepTarget target;
+  target.percent = percent;
+  const auto tin = par::simplify_dem(g, core::GridFrame::from_jacobian(j), {}, target, nullptr);
+  return to_mesh(g, tin.cells, tin.faces);
+}
+
+}  // namespace
+
+TEST_CASE("a mesh identical to the DEM grid has distance error 0", "[parallel][evaluate]") {
+  const auto g = hills();
+  const auto grid = core::grid_tin(g);
+  const auto t = to_mesh(g, grid.cells, grid.faces);
+  par::EvalOptions opt;
+  opt.points = 20;
+  opt.sets = 2;
+  const auto r = par::evaluate_distances(t, t, opt);
+  CHECK(r.set_errors.size() == 2);
+  CHECK(r.distance_error == 0.0);
+  // The engine's unsimplified TIN is the same grid TIN: error 0 up to rounding.
+  const auto r100 = par::evaluate_distances(t, simplified(g, 100.0), opt);
+  CHECK(r100.distance_error < 1e-12);
+}
+
+TEST_CASE("the distance error grows as fewer vertices are kept", "[parallel][evaluate]") {
+  const auto g = hills();
+  const auto grid = core::grid_tin(g);
+  const auto t = to_mesh(g, grid.cells, grid.faces);
+  par::EvalOptions opt;
+  opt.points = 25;
+  opt.sets = 2;
+  const double e50 = par::evaluate_distances(t, simplified(g, 50.0), opt).distance_error;
+  const double e10 = par::evaluate_distances(t, simplified(g, 10.0), opt).distance_error;
+  CHECK(e50 > 0);
+  CHECK(e10 > e50);
+}
+
+TEST_CASE("evaluation figures are identical for 1 and 2 threads", "[parallel][evaluate][determinism]") {
+  const auto g = hills();
+  const auto grid = core::grid_tin(g);
+  const auto t = to_mesh(g, grid.cells, grid.faces);
+  const auto s = simplified(g, 20.0);
+  par::EvalOptions opt;
+  opt.points = 30;
+  std::vector<double> errors[2];
+  for (int threads = 1; threads <= 2; ++threads) {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+    errors[threads - 1] = par::evaluate_distances(t, s, opt).set_errors;
+  }
+  CHECK(errors[0] == errors[1]);
+}
+
+TEST_CASE("sample points outside the mesh are an error with their count", "[parallel][evaluate]") {
+  const auto g = hills();
+  const auto grid = core::grid_tin(g);
+  const auto t = to_mesh(g, grid.cells, grid.faces);
+  // A mesh covering only the western half of the DEM.
+  core::TriMesh half = t;
+  half.faces.clear();
+  for (const auto& f : t.faces) {
+    if (t.xyz[3 * f[0]] < 170 && t.xyz[3 * f[1]] < 170 && t.xyz[3 * f[2]] < 170) half.faces.push_back(f);
+  }
+  par::EvalOptions opt;
+  opt.points = 40;
+  CHECK_THROWS_WITH(par::evaluate_distances(t, half, opt),
+                    Catch::Matches(".*[0-9]+ of 40 sample points of set 1 lie outside the mesh's footprint"));
+}
