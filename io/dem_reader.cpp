@@ -112,8 +112,12 @@ Dem read_dem(const std::string& path, const DemReadOptions& options,
 
   CPLErrorReset();
   std::unique_ptr<GDALDataset, DatasetCloser> ds(
-      GDALDataset::Open(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY));
-  if (!ds) throw InputError(path + ": not a raster GDAL can read (" + last_gdal_error() + ")");
+      GDALDataset::Open(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY | GDAL_OF_VERBOSE_ERROR));
+  if (!ds) {
+    const std::string why = CPLGetLastErrorMsg();
+    throw InputError(path + ": not a raster GDAL can read" +
+                     (why.empty() ? std::string() : " (" + last_gdal_error() + ")"));
+  }
   if (ds->GetRasterCount() < 1) throw InputError(path + ": has no raster band");
   const int width = ds->GetRasterXSize(), height = ds->GetRasterYSize();
   if (width < 2 || height < 2) {

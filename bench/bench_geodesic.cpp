@@ -1,0 +1,76 @@
+// BM_dijkstra_one_source: one Dijkstra query (1 source -> 99 targets) on the Steiner graph of a
+// 1000 x 1000-cell crop (1M cells) of the Pyrenees SRTM tile, at the default delta.
+#include <benchmark/benchmark.h>
+#include <cpl_conv.h>
+#include <gdal_priv.h>
+
+#include <cmath>
+#include <memory>
+#include <string>
+
+#include "core/steiner_graph.hpp"
+#include "core/surface_sampling.hpp"
+#include "io/dem_reader.hpp"
+#include "parallel/evaluate.hpp"
+
+namespace {
+
+const std::string kDem = std::string(DPTS_SHARED_DATA_DIR) + "/pyrenees_srtm3_n42e001.tif";
+
+struct Setup {
+  dpts::core::TriMesh mesh;
+  std::unique_ptr<dpts::core::SteinerGraph> graph;
+  std::vector<dpts::core::SurfacePoint> points;
+};
+
+const Setup* setup() {
+  static std::unique_ptr<Setup> s = []() -> std::unique_ptr<Setup> {
+    GDALAllRegister();
+    CPLSetConfigOption("GDAL_CACHEMAX", "64");
+    try {
+      const dpts::io::Dem dem = dpts::io::read_dem(kDem, {}, nullptr);
+      dpts::core::HeightGrid crop;
+      crop.width = crop.height = 1000;
+      for (int r = 0; r < 1000; ++r) {
+        for (int c = 0; c < 1000; ++c) crop.z.push_back(dem.grid.z[dem.grid.index(c, r)]);
+      }
+      const auto grid = dpts::core::grid_tin(crop);
+      auto out = std::make_unique<Setup>();
+      const double m = dem.frame.metres_per_unit;
+      for (auto cell : grid.cells) {
+        const int c = static_cast<int>(cell % 1000), r = static_cast<int>(cell / 1000);
+        out->mesh.xyz.insert(out->mesh.xyz.end(), {m * dem.frame.u(c, r), m * dem.frame.w(c, r), crop.z[cell]});
+      }
+      out->mesh.faces = grid.faces;
+      dpts::core::fix_orientation(out->mesh);
+      const double delta = dpts::par::kDefaultDeltaFactor * dpts::core::mean_edge_length(out->mesh);
+      out->graph = std::make_unique<dpts::core::SteinerGraph>(out->mesh, delta);
+      out->points = dpts::core::sample_uniform(out->mesh, 100, 1);
+      return out;
+    } catch (const std::exception&) {
+      return nullptr;
+    }
+  }();
+  return s.get();
+}
+
+void BM_dijkstra_one_source(benchmark::State& state) {
+  const Setup* s = setup();
+  if (!s) {
+    state.SkipWithError(("cannot read " + kDem).c_str());
+    return;
+  }
+  dpts::core::GeodesicQuery query(*s->graph);
+  const std::vector<dpts::core::SurfacePoint> targets(s->points.begin() + 1, s->points.end());
+  std::vector<double> d;
+  for (auto _ : state) {
+    query.distances(s->points[0], targets, d);
+    benchmark::DoNotOptimize(d.data());
+  }
+  const double nodes = static_cast<double>(s->graph->node_count());
+  state.counters["graph_nodes"] = nodes;
+  state.counters["nodes/s"] = benchmark::Counter(nodes * state.iterations(), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_dijkstra_one_source)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+}  // namespace
