@@ -213,7 +213,8 @@ int run(const Options& o) {
     std::printf("coverage         mesh area / footprint area = %.9f\n", mc.area / footprint_area);
     std::printf("vertical error   RMSE %.4f m, max %.4f m over %zu cell centres (%zu outside the mesh)\n",
                 rmse, vmax, measured, uncovered);
-    std::printf("steiner graphs   delta %.4f m: T %zu nodes, T' %zu nodes\n", r.delta_m, r.original_nodes, r.simplified_nodes);
+    std::printf("steiner graphs   delta %.4f m: T %zu nodes (%.2f s), T' %zu nodes (%.2f s)\n", r.delta_m,
+                r.original_nodes, r.original_s, r.simplified_nodes, r.simplified_s);
     for (std::size_t i = 0; i < r.set_errors.size(); ++i) {
       std::printf("distance error   set %zu: %.6f\n", i + 1, r.set_errors[i]);
     }
@@ -235,6 +236,8 @@ int run(const Options& o) {
        << ",\"faces_over_nodata\":" << over_nodata << ",\"coverage\":" << json_number(mc.area / footprint_area)
        << ",\"cells_outside_mesh\":" << uncovered << ",\"threads\":" << threads
        << ",\"dem\":" << json_string(o.dem) << ",\"mesh\":" << json_string(o.mesh)
+       << ",\"seconds_geodesics_dem\":" << json_number(r.original_s)
+       << ",\"seconds_geodesics_mesh\":" << json_number(r.simplified_s)
        << ",\"seconds\":" << json_number(secs) << "}";
     std::cout << js.str() << "\n";
   }

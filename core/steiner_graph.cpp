@@ -64,6 +64,7 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
       face_edges_[std::get<1>(e[i])][std::get<2>(e[i])] = edge;
     }
     edge_faces_.push_back(faces);
+    edge_ends_.push_back({static_cast<std::uint32_t>(key >> 32), static_cast<std::uint32_t>(key & 0xFFFFFFFFu)});
     // floor(len / delta) points evenly inside the edge.
     const double* a = &mesh.xyz[3 * (key >> 32)];
     const double* b = &mesh.xyz[3 * (key & 0xFFFFFFFFu)];
@@ -166,13 +167,16 @@ void GeodesicQuery::distances(const SurfacePoint& source, const std::vector<Surf
       heap_.push(nd, v);
     }
   };
-  auto relax_face = [&](std::uint32_t f, const double* p, double d) {
-    g_.face_nodes(f, nodes_);
-    for (std::uint32_t v : nodes_) relax(v, p, g_.position(v), d);
+  auto relax_targets = [&](std::uint32_t f, const double* p, double d) {
     for (std::int32_t j = face_target_head_[f]; j >= 0; j = target_next_[j]) {
       const double q[3] = {targets[j].x, targets[j].y, targets[j].z};
       relax(static_cast<std::uint32_t>(n + j), p, q, d);
     }
+  };
+  auto relax_face = [&](std::uint32_t f, const double* p, double d) {
+    g_.face_nodes(f, nodes_);
+    for (std::uint32_t v : nodes_) relax(v, p, g_.position(v), d);
+    relax_targets(f, p, d);
   };
   relax_face(source.face, src, 0.0);
   std::size_t remaining = targets.size();
@@ -185,7 +189,9 @@ void GeodesicQuery::distances(const SurfacePoint& source, const std::vector<Surf
       continue;
     }
     const double* p = g_.position(u);
-    g_.for_each_face(u, [&](std::uint32_t f) { relax_face(f, p, d); });
+    g_.for_each_neighbour(
+        u, [&](std::uint32_t v) { relax(v, p, g_.position(v), d); },
+        [&](std::uint32_t f) { relax_targets(f, p, d); });
   }
   for (const auto& t : targets) face_target_head_[t.face] = -1;
 }

@@ -42,6 +42,48 @@ class SteinerGraph {
 
   // The nodes on face f's boundary (its corners and its edges' Steiner points), into out.
   void face_nodes(std::uint32_t f, std::vector<std::uint32_t>& out) const;
+
+  // Calls node_fn(v) for every node v joined to `node` by a graph edge, except that along the
+  // node's own edges only the nearest node on each side is given: the others lie on the same
+  // straight line, so the path through the nearest one has the same length (and Dijkstra finds
+  // it). Calls face_fn(f) for every face the node lies on.
+  template <typename NodeFn, typename FaceFn>
+  void for_each_neighbour(std::uint32_t node, NodeFn&& node_fn, FaceFn&& face_fn) const {
+    const std::uint32_t nv = static_cast<std::uint32_t>(mesh_.vertex_count());
+    auto edge_interior = [&](std::uint32_t e) {
+      for (std::uint32_t n = edge_first_[e]; n < edge_first_[e + 1]; ++n) node_fn(n);
+    };
+    if (node < nv) {
+      for (std::uint32_t k = vertex_face_first_[node]; k < vertex_face_first_[node + 1]; ++k) {
+        const std::uint32_t f = vertex_faces_[k];
+        const auto& fv = mesh_.faces[f];
+        const int i = fv[0] == node ? 0 : fv[1] == node ? 1 : 2;
+        // Along the two edges at this corner: the first node on each.
+        for (int li : {i, (i + 2) % 3}) {
+          const std::uint32_t e = face_edges_[f][li];
+          if (edge_first_[e] == edge_first_[e + 1]) {
+            node_fn(edge_ends_[e][0] == node ? edge_ends_[e][1] : edge_ends_[e][0]);
+          } else {
+            node_fn(edge_ends_[e][0] == node ? edge_first_[e] : edge_first_[e + 1] - 1);
+          }
+        }
+        edge_interior(face_edges_[f][(i + 1) % 3]);  // across the face
+        face_fn(f);
+      }
+      return;
+    }
+    const std::uint32_t e = node_edge_[node - nv];
+    node_fn(node == edge_first_[e] ? edge_ends_[e][0] : node - 1);
+    node_fn(node + 1 == edge_first_[e + 1] ? edge_ends_[e][1] : node + 1);
+    for (std::uint32_t f : edge_faces_[e]) {
+      if (f == kNoFace) continue;
+      const int li = face_edges_[f][0] == e ? 0 : face_edges_[f][1] == e ? 1 : 2;
+      node_fn(mesh_.faces[f][(li + 2) % 3]);  // the opposite corner
+      edge_interior(face_edges_[f][(li + 1) % 3]);
+      edge_interior(face_edges_[f][(li + 2) % 3]);
+      face_fn(f);
+    }
+  }
   // The faces a node lies on: a corner's incident faces, or an edge point's one or two faces.
   template <typename Fn>
   void for_each_face(std::uint32_t node, Fn&& fn) const {
@@ -63,6 +105,7 @@ class SteinerGraph {
   std::vector<std::array<std::uint32_t, 3>> face_edges_;  // edge of (v0,v1), (v1,v2), (v2,v0)
   std::vector<std::array<std::uint32_t, 2>> edge_faces_;
   std::vector<std::uint32_t> edge_first_;               // first Steiner node of each edge, + end
+  std::vector<std::array<std::uint32_t, 2>> edge_ends_;  // (lower, higher) vertex; nodes run low -> high
   std::vector<std::uint32_t> node_edge_;                // Steiner node - vertex_count -> edge
   std::vector<std::uint32_t> vertex_face_first_, vertex_faces_;  // CSR vertex -> faces
 };

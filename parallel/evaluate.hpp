@@ -32,6 +32,7 @@ struct EvalResult {
   double delta_m = 0;
   std::size_t original_nodes = 0, simplified_nodes = 0;  // Steiner graph sizes
   std::size_t snapped = 0;            // sample points snapped onto T'
+  double original_s = 0, simplified_s = 0;  // wall time of the geodesics on T and on T'
 };
 
 // Samples K points uniformly in T's footprint per set (seeded by seed and set), lifts them onto
