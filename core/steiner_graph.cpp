@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <functional>
 #include <limits>
 #include <stdexcept>
@@ -99,39 +98,59 @@ void SteinerGraph::face_nodes(std::uint32_t f, std::vector<std::uint32_t>& out) 
   }
 }
 
-void RadixHeap::clear() {
-  for (auto& b : buckets_) b.clear();
-  last_ = 0;
-  size_ = 0;
+void NodeHeap::reset(std::size_t nodes) {
+  heap_.clear();
+  pos_.assign(nodes, 0);
 }
 
-int RadixHeap::bucket(std::uint64_t key, std::uint64_t last) {
-  return key == last ? 0 : 64 - __builtin_clzll(key ^ last);
-}
-
-void RadixHeap::push(double key, std::uint32_t value) {
-  std::uint64_t bits;
-  std::memcpy(&bits, &key, sizeof bits);  // note: non-negative doubles order like their bits
-  buckets_[bucket(bits, last_)].emplace_back(bits, value);
-  ++size_;
-}
-
-std::pair<double, std::uint32_t> RadixHeap::pop() {
-  if (buckets_[0].empty()) {
-    int i = 1;
-    while (buckets_[i].empty()) ++i;
-    std::uint64_t least = buckets_[i][0].first;
-    for (const auto& e : buckets_[i]) least = std::min(least, e.first);
-    last_ = least;
-    for (const auto& e : buckets_[i]) buckets_[bucket(e.first, last_)].push_back(e);
-    buckets_[i].clear();
+void NodeHeap::sift_up(std::size_t i, Entry e) {
+  while (i > 0) {
+    const std::size_t parent = (i - 1) / 4;
+    if (!(e.key < heap_[parent].key)) break;
+    heap_[i] = heap_[parent];
+    pos_[heap_[i].node] = static_cast<std::uint32_t>(i + 1);
+    i = parent;
   }
-  const auto e = buckets_[0].back();
-  buckets_[0].pop_back();
-  --size_;
-  double key;
-  std::memcpy(&key, &e.first, sizeof key);
-  return {key, e.second};
+  heap_[i] = e;
+  pos_[e.node] = static_cast<std::uint32_t>(i + 1);
+}
+
+void NodeHeap::push_or_decrease(std::uint32_t node, double key) {
+  const std::uint32_t p = pos_[node];
+  if (p == 0) {
+    heap_.push_back({key, node});
+    sift_up(heap_.size() - 1, {key, node});
+  } else {
+    sift_up(p - 1, {key, node});
+  }
+}
+
+std::pair<double, std::uint32_t> NodeHeap::pop() {
+  const Entry top = heap_.front();
+  pos_[top.node] = 0;
+  const Entry last = heap_.back();
+  heap_.pop_back();
+  if (!heap_.empty()) {
+    // Sift `last` down from the root.
+    std::size_t i = 0;
+    const std::size_t n = heap_.size();
+    for (;;) {
+      const std::size_t c0 = 4 * i + 1;
+      if (c0 >= n) break;
+      std::size_t best = c0;
+      const std::size_t c_end = std::min(c0 + 4, n);
+      for (std::size_t c = c0 + 1; c < c_end; ++c) {
+        if (heap_[c].key < heap_[best].key) best = c;
+      }
+      if (!(heap_[best].key < last.key)) break;
+      heap_[i] = heap_[best];
+      pos_[heap_[i].node] = static_cast<std::uint32_t>(i + 1);
+      i = best;
+    }
+    heap_[i] = last;
+    pos_[last.node] = static_cast<std::uint32_t>(i + 1);
+  }
+  return {top.key, top.node};
 }
 
 GeodesicQuery::GeodesicQuery(const SteinerGraph& graph)
@@ -150,7 +169,7 @@ void GeodesicQuery::distances(const SurfacePoint& source, const std::vector<Surf
     target_next_[j] = face_target_head_[targets[j].face];
     face_target_head_[targets[j].face] = static_cast<std::int32_t>(j);
   }
-  heap_.clear();
+  heap_.reset(n + targets.size());
   const double src[3] = {source.x, source.y, source.z};
   // Relaxes from a point p at distance d into face f: its boundary nodes and its targets.
   // note: a node improves only if |p v| < dist(v) - d; comparing squares first skips the
@@ -164,7 +183,7 @@ void GeodesicQuery::distances(const SurfacePoint& source, const std::vector<Surf
     const double nd = d + std::sqrt(w2);
     if (nd < dist_[v]) {
       dist_[v] = nd;
-      heap_.push(nd, v);
+      heap_.push_or_decrease(v, nd);
     }
   };
   auto relax_targets = [&](std::uint32_t f, const double* p, double d) {
@@ -182,7 +201,6 @@ void GeodesicQuery::distances(const SurfacePoint& source, const std::vector<Surf
   std::size_t remaining = targets.size();
   while (!heap_.empty() && remaining > 0) {
     const auto [d, u] = heap_.pop();
-    if (d > dist_[u]) continue;  // stale entry
     if (u >= n) {
       out[u - n] = d;
       --remaining;

@@ -110,20 +110,24 @@ class SteinerGraph {
   std::vector<std::uint32_t> vertex_face_first_, vertex_faces_;  // CSR vertex -> faces
 };
 
-// A monotone priority queue for Dijkstra (radix heap): keys are non-negative doubles whose
-// bit patterns order like the values; every key pushed is >= the last key popped.
-class RadixHeap {
+// An indexed 4-ary min-heap of node ids keyed by distance, with decrease-key: each node is in
+// the heap at most once (fewer entries than a lazy heap with duplicates).
+class NodeHeap {
  public:
-  bool empty() const { return size_ == 0; }
-  void clear();
-  void push(double key, std::uint32_t value);
+  void reset(std::size_t nodes);
+  bool empty() const { return heap_.empty(); }
+  // Inserts node or lowers its key (key must not be larger than the current one).
+  void push_or_decrease(std::uint32_t node, double key);
   std::pair<double, std::uint32_t> pop();
 
  private:
-  static int bucket(std::uint64_t key, std::uint64_t last);
-  std::array<std::vector<std::pair<std::uint64_t, std::uint32_t>>, 65> buckets_;
-  std::uint64_t last_ = 0;
-  std::size_t size_ = 0;
+  struct Entry {
+    double key;
+    std::uint32_t node;
+  };
+  void sift_up(std::size_t i, Entry e);
+  std::vector<Entry> heap_;
+  std::vector<std::uint32_t> pos_;  // node -> heap index + 1, 0: not in the heap
 };
 
 // Dijkstra on a SteinerGraph from one surface point to many. Holds per-query scratch memory:
@@ -141,7 +145,7 @@ class GeodesicQuery {
  private:
   const SteinerGraph& g_;
   std::vector<double> dist_;
-  RadixHeap heap_;
+  NodeHeap heap_;
   std::vector<std::int32_t> face_target_head_;  // first target in a face, -1: none
   std::vector<std::int32_t> target_next_;
   std::vector<std::uint32_t> nodes_;
