@@ -12,15 +12,6 @@
 namespace dpts::cli {
 namespace {
 
-template <typename T>
-T parse_number(const std::string& flag, const std::string& text, T min, const char* expected) {
-  T value{};
-  const auto res = std::from_chars(text.data(), text.data() + text.size(), value);
-  if (res.ec != std::errc() || res.ptr != text.data() + text.size() || value < min) {
-    throw UsageError(flag + " " + text + ": expected " + expected);
-  }
-  return value;
-}
 
 }  // namespace
 

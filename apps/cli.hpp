@@ -1,6 +1,7 @@
 // Command-line parsing and progress reporting shared by the dpts executables.
 #pragma once
 
+#include <charconv>
 #include <chrono>
 #include <cstdint>
 #include <string>
@@ -9,6 +10,7 @@
 #include <vector>
 
 #include "core/elimination.hpp"
+#include "core/errors.hpp"
 #include "parallel/simplify.hpp"
 
 namespace dpts::cli {
@@ -27,6 +29,18 @@ struct ParOptions {
   bool version = false;
   std::vector<std::pair<std::string, std::string>> config;  // GDAL config options
 };
+
+// Parses a whole number or decimal for a flag: "FLAG TEXT: expected EXPECTED" as a UsageError
+// unless all of text is a number >= min.
+template <typename T>
+T parse_number(const std::string& flag, const std::string& text, T min, const char* expected) {
+  T value{};
+  const auto res = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (res.ec != std::errc() || res.ptr != text.data() + text.size() || !(value >= min)) {
+    throw UsageError(flag + " " + text + ": expected " + expected);
+  }
+  return value;
+}
 
 // Parses dpts-par's arguments. Throws UsageError with a one-line message naming the flag.
 ParOptions parse_par(const std::vector<std::string>& args);

@@ -13,6 +13,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "apps/cli.hpp"
 #include "core/errors.hpp"
 #include "core/footprint.hpp"
 #include "core/mesh_check.hpp"
@@ -61,15 +62,6 @@ coverage, faces over no-data) and its vertical error at every valid cell centre.
 Exit status: 0 ok, 1 failure (bad input, points outside the mesh), 2 bad usage.
 )";
 
-template <typename T>
-T number(const std::string& flag, const std::string& text, T min, const char* expected) {
-  T v{};
-  const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
-  if (r.ec != std::errc() || r.ptr != text.data() + text.size() || !(v >= min)) {
-    throw UsageError(flag + " " + text + ": expected " + expected);
-  }
-  return v;
-}
 
 Options parse(const std::vector<std::string>& args) {
   Options o;
@@ -88,19 +80,19 @@ Options parse(const std::vector<std::string>& args) {
     } else if (a == "--mesh") {
       o.mesh = value();
     } else if (a == "--points") {
-      o.eval.points = number<int>(a, value(), 2, "an integer >= 2");
+      o.eval.points = dpts::cli::parse_number<int>(a, value(), 2, "an integer >= 2");
     } else if (a == "--sets") {
-      o.eval.sets = number<int>(a, value(), 1, "an integer >= 1");
+      o.eval.sets = dpts::cli::parse_number<int>(a, value(), 1, "an integer >= 1");
     } else if (a == "--seed") {
-      o.eval.seed = number<std::uint64_t>(a, value(), 0, "a non-negative integer");
+      o.eval.seed = dpts::cli::parse_number<std::uint64_t>(a, value(), 0, "a non-negative integer");
     } else if (a == "--delta") {
-      o.eval.delta_m = number<double>(a, value(), 1e-9, "a length in metres > 0");
+      o.eval.delta_m = dpts::cli::parse_number<double>(a, value(), 1e-9, "a length in metres > 0");
     } else if (a == "--snap") {
-      o.snap_m = number<double>(a, value(), 0.0, "a length in metres >= 0");
+      o.snap_m = dpts::cli::parse_number<double>(a, value(), 0.0, "a length in metres >= 0");
     } else if (a == "--t-srs") {
       o.t_srs = value();
     } else if (a == "--threads") {
-      o.threads = number<int>(a, value(), 1, "an integer >= 1");
+      o.threads = dpts::cli::parse_number<int>(a, value(), 1, "an integer >= 1");
     } else if (a == "--json") {
       o.json = true;
     } else if (a == "--quiet" || a == "-q") {

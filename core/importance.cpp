@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "core/random.hpp"
+
 namespace dpts::core {
 namespace {
 
@@ -85,17 +87,6 @@ double triangle_area(P2 a, P2 b, P2 c) { return 0.5 * cross(a, b, c); }
 
 std::size_t fan_count(const Star& s) { return s.closed ? s.n : s.n - 1; }
 
-// splitmix64: a small, well-mixed counter-based generator (deterministic across platforms).
-struct SplitMix {
-  std::uint64_t state;
-  std::uint64_t next() {
-    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
-  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
-};
 
 // Height of the surface `tris` (over points pts) at (x, y), or NaN when outside all.
 double height_in(const std::vector<std::array<const Point3*, 3>>& tris, double x, double y) {

@@ -84,18 +84,6 @@ class SteinerGraph {
       face_fn(f);
     }
   }
-  // The faces a node lies on: a corner's incident faces, or an edge point's one or two faces.
-  template <typename Fn>
-  void for_each_face(std::uint32_t node, Fn&& fn) const {
-    if (node < mesh_.vertex_count()) {
-      for (std::uint32_t k = vertex_face_first_[node]; k < vertex_face_first_[node + 1]; ++k) fn(vertex_faces_[k]);
-    } else {
-      const auto& ef = edge_faces_[node_edge_[node - mesh_.vertex_count()]];
-      fn(ef[0]);
-      if (ef[1] != kNoFace) fn(ef[1]);
-    }
-  }
-
   static constexpr std::uint32_t kNoFace = 0xFFFFFFFFu;
 
  private:

@@ -40,12 +40,17 @@ core::TriMesh simplified(const core::HeightGrid& g, double percent) {
   return to_mesh(g, tin.cells, tin.faces);
 }
 
+// The grid TIN of hills() in metres.
+core::TriMesh hills_grid_mesh(const core::HeightGrid& g) {
+  const auto grid = core::grid_tin(g);
+  return to_mesh(g, grid.cells, grid.faces);
+}
+
 }  // namespace
 
 TEST_CASE("a mesh identical to the DEM grid has distance error 0", "[parallel][evaluate]") {
   const auto g = hills();
-  const auto grid = core::grid_tin(g);
-  const auto t = to_mesh(g, grid.cells, grid.faces);
+  const auto t = hills_grid_mesh(g);
   par::EvalOptions opt;
   opt.points = 20;
   opt.sets = 2;
@@ -59,8 +64,7 @@ TEST_CASE("a mesh identical to the DEM grid has distance error 0", "[parallel][e
 
 TEST_CASE("the distance error grows as fewer vertices are kept", "[parallel][evaluate]") {
   const auto g = hills();
-  const auto grid = core::grid_tin(g);
-  const auto t = to_mesh(g, grid.cells, grid.faces);
+  const auto t = hills_grid_mesh(g);
   par::EvalOptions opt;
   opt.points = 25;
   opt.sets = 2;
@@ -72,8 +76,7 @@ TEST_CASE("the distance error grows as fewer vertices are kept", "[parallel][eva
 
 TEST_CASE("evaluation figures are identical for 1 and 2 threads", "[parallel][evaluate][determinism]") {
   const auto g = hills();
-  const auto grid = core::grid_tin(g);
-  const auto t = to_mesh(g, grid.cells, grid.faces);
+  const auto t = hills_grid_mesh(g);
   const auto s = simplified(g, 20.0);
   par::EvalOptions opt;
   opt.points = 30;
@@ -87,8 +90,7 @@ TEST_CASE("evaluation figures are identical for 1 and 2 threads", "[parallel][ev
 
 TEST_CASE("sample points outside the mesh are an error with their count", "[parallel][evaluate]") {
   const auto g = hills();
-  const auto grid = core::grid_tin(g);
-  const auto t = to_mesh(g, grid.cells, grid.faces);
+  const auto t = hills_grid_mesh(g);
   // A mesh covering only the western half of the DEM.
   core::TriMesh half = t;
   half.faces.clear();
