@@ -45,9 +45,9 @@ void BM_simplify_dem(benchmark::State& state, dpts::core::Importance kind) {
   }
   const double cells = static_cast<double>(dem->grid.cell_count());
   state.counters["cells/s"] = benchmark::Counter(cells * state.iterations(), benchmark::Counter::kIsRate);
-  state.counters["us/cell"] = benchmark::Counter(cells * state.iterations(),
+  state.counters["s_per_Mcell"] = benchmark::Counter(cells * state.iterations(),
                                                  benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
-  state.counters["us/cell"] = benchmark::Counter(
+  state.counters["s_per_Mcell"] = benchmark::Counter(
       cells * state.iterations() / 1e6, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 
