@@ -193,7 +193,13 @@ int run(const Options& o) {
 
   par::EvalOptions eo = o.eval;
   eo.snap_m = snap;
-  const par::EvalResult r = par::evaluate_distances(t, s, eo);
+  // Progress: one line per stage on stderr once the run has lasted a second (not with --quiet).
+  const par::StageProgress progress = [&](const std::string& what) {
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!o.quiet && elapsed >= 1.0) std::fprintf(stderr, "dpts-eval: %s (%.0f s)\n", what.c_str(), elapsed);
+    return true;  // note: dpts-eval writes no file, so Ctrl-C may simply end the process
+  };
+  const par::EvalResult r = par::evaluate_distances(t, s, eo, progress);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double rmse = measured ? std::sqrt(sq / measured) : 0.0;
 
@@ -247,6 +253,7 @@ int main(int argc, char** argv) {
   } catch (const dpts::UsageError& e) {
     std::cerr << "dpts-eval: " << e.what() << "\nTry 'dpts-eval --help' for more information.\n";
     return 2;
+
   } catch (const std::exception& e) {
     std::cerr << "dpts-eval: error: " << e.what() << "\n";
     return 1;

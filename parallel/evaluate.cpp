@@ -70,7 +70,10 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
 }
 
 EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh& simplified,
-                              const EvalOptions& options) {
+                              const EvalOptions& options, const StageProgress& progress) {
+  auto stage = [&](const std::string& what) {
+    if (progress && !progress(what)) throw Cancelled();
+  };
   EvalResult result;
   result.delta_m = options.delta_m > 0 ? options.delta_m
                                        : kDefaultDeltaFactor * core::mean_edge_length(original);
@@ -78,6 +81,8 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
   const core::SteinerGraph graph_s(simplified, result.delta_m);
   result.original_nodes = graph_t.node_count();
   result.simplified_nodes = graph_s.node_count();
+  stage("Steiner graphs: T " + std::to_string(result.original_nodes) + " nodes, T' " +
+        std::to_string(result.simplified_nodes) + " nodes");
   const core::PointLocator locate_s(simplified);
   const auto k = static_cast<std::size_t>(options.points);
   for (int set = 0; set < options.sets; ++set) {
@@ -98,9 +103,12 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
       throw InputError(std::to_string(outside) + " of " + std::to_string(k) + " sample points of set " +
                        std::to_string(set + 1) + " lie outside the mesh's footprint");
     }
+    const std::string set_name = "set " + std::to_string(set + 1) + "/" + std::to_string(options.sets);
+    stage(set_name + ": geodesics on T");
     auto t0 = std::chrono::steady_clock::now();
     const std::vector<double> dt = pairwise_distances(graph_t, on_t);
     auto t1 = std::chrono::steady_clock::now();
+    stage(set_name + ": geodesics on T'");
     const std::vector<double> ds = pairwise_distances(graph_s, on_s);
     auto t2 = std::chrono::steady_clock::now();
     result.original_s += std::chrono::duration<double>(t1 - t0).count();

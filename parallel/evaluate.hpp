@@ -3,6 +3,8 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <string>
 #include <vector>
 
 #include "core/steiner_graph.hpp"
@@ -38,7 +40,11 @@ struct EvalResult {
 // Samples K points uniformly in T's footprint per set (seeded by seed and set), lifts them onto
 // T and T', and compares all pairwise geodesics. Throws InputError when sample points fall
 // outside T' (farther than snap_m), with their count.
+// `progress`, if given, is called from the serial points between the stages (graphs built, each
+// set's geodesics on T and on T') with a one-line description; returning false stops the run
+// with dpts::Cancelled.
+using StageProgress = std::function<bool(const std::string& stage)>;
 EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh& simplified,
-                              const EvalOptions& options);
+                              const EvalOptions& options, const StageProgress& progress = nullptr);
 
 }  // namespace dpts::par
