@@ -10,10 +10,7 @@
 #include "core/errors.hpp"
 
 namespace dpts::cli {
-namespace {
-
-
-}  // namespace
+namespace {}  // namespace
 
 std::string par_help() {
   return R"(usage: dpts-par [options] INPUT OUTPUT
@@ -86,7 +83,8 @@ ParOptions parse_par(const std::vector<std::string>& args) {
       if (!v.empty() && v.back() == '%') v.pop_back();
       double p = 0;
       const auto res = std::from_chars(v.data(), v.data() + v.size(), p);
-      if (v.empty() || res.ec != std::errc() || res.ptr != v.data() + v.size() || !(p > 0) || p > 100) {
+      if (v.empty() || res.ec != std::errc() || res.ptr != v.data() + v.size() || !(p > 0) ||
+          p > 100) {
         throw UsageError("--keep " + o.keep_text + ": expected a percentage with 0 < P <= 100");
       }
       o.keep.percent = p;

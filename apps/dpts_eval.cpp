@@ -37,7 +37,7 @@ struct Options {
 const char* kHelp = R"(usage: dpts-eval --dem DEM --mesh MESH.ply [options]
 
 Measures how well a TIN preserves the surface (geodesic) distances of the DEM it was made
-from (Ben-Moshe et al.): for K random points uniform in the DEM's valid footprint, the error
+from (the DPTS paper): for K random points uniform in the DEM's valid footprint, the error
 is the mean over all pairs of |GD_T - GD_T'| / GD_T, where T is the DEM's full-resolution
 grid TIN and T' the mesh, and geodesics are shortest paths on the Steiner graph (points every
 delta along edges, each triangle's boundary points pairwise connected). The result is the
@@ -61,7 +61,6 @@ coverage, faces over no-data) and its vertical error at every valid cell centre.
   --help, --version
 Exit status: 0 ok, 1 failure (bad input, points outside the mesh), 2 bad usage.
 )";
-
 
 Options parse(const std::vector<std::string>& args) {
   Options o;
@@ -151,7 +150,8 @@ int run(const Options& o) {
     const auto xy = dem.output_xy(grid.cells);
     t.xyz.resize(3 * grid.cells.size());
     for (std::size_t i = 0; i < grid.cells.size(); ++i) {
-      t.xyz[3 * i] = xy[2 * i], t.xyz[3 * i + 1] = xy[2 * i + 1], t.xyz[3 * i + 2] = dem.grid.z[grid.cells[i]];
+      t.xyz[3 * i] = xy[2 * i], t.xyz[3 * i + 1] = xy[2 * i + 1],
+                t.xyz[3 * i + 2] = dem.grid.z[grid.cells[i]];
     }
     t.faces = grid.faces;
     core::fix_orientation(t);
@@ -166,17 +166,21 @@ int run(const Options& o) {
 
   // Validity of T' over the DEM.
   std::vector<double> s_xy(2 * s.vertex_count());
-  for (std::size_t v = 0; v < s.vertex_count(); ++v) s_xy[2 * v] = s.xyz[3 * v], s_xy[2 * v + 1] = s.xyz[3 * v + 1];
+  for (std::size_t v = 0; v < s.vertex_count(); ++v)
+    s_xy[2 * v] = s.xyz[3 * v], s_xy[2 * v + 1] = s.xyz[3 * v + 1];
   const core::MeshCheck mc = core::check_mesh(s_xy, s.faces);
   std::vector<double> t_xy(2 * t.vertex_count());
-  for (std::size_t v = 0; v < t.vertex_count(); ++v) t_xy[2 * v] = t.xyz[3 * v], t_xy[2 * v + 1] = t.xyz[3 * v + 1];
+  for (std::size_t v = 0; v < t.vertex_count(); ++v)
+    t_xy[2 * v] = t.xyz[3 * v], t_xy[2 * v + 1] = t.xyz[3 * v + 1];
   const double footprint_area = core::check_mesh(t_xy, t.faces).area;
   const double tol = dem.to_output ? 0.01 : 1e-6;  // cells; reprojection rounding
-  const std::size_t over_nodata = core::faces_over_nodata(dem.grid, dem.grid_xy(s_xy), s.faces, tol);
+  const std::size_t over_nodata =
+      core::faces_over_nodata(dem.grid, dem.grid_xy(s_xy), s.faces, tol);
 
   // Vertical error at every cell centre of T's footprint.
   const core::PointLocator locate_s(s);
-  const double snap = o.snap_m >= 0 ? o.snap_m : (dem.to_output ? 0.5 * dem.frame.metres_per_unit : 0.0);
+  const double snap =
+      o.snap_m >= 0 ? o.snap_m : (dem.to_output ? 0.5 * dem.frame.metres_per_unit : 0.0);
   double sq = 0, vmax = 0;
   std::size_t measured = 0, uncovered = 0;
   for (std::size_t v = 0; v < t.vertex_count(); ++v) {
@@ -195,24 +199,31 @@ int run(const Options& o) {
   eo.snap_m = snap;
   // Progress: one line per stage on stderr once the run has lasted a second (not with --quiet).
   const par::StageProgress progress = [&](const std::string& what) {
-    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (!o.quiet && elapsed >= 1.0) std::fprintf(stderr, "dpts-eval: %s (%.0f s)\n", what.c_str(), elapsed);
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!o.quiet && elapsed >= 1.0)
+      std::fprintf(stderr, "dpts-eval: %s (%.0f s)\n", what.c_str(), elapsed);
     return true;  // note: dpts-eval writes no file, so Ctrl-C may simply end the process
   };
   const par::EvalResult r = par::evaluate_distances(t, s, eo, progress);
-  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double secs =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double rmse = measured ? std::sqrt(sq / measured) : 0.0;
 
   if (!o.quiet) {
-    std::printf("dem              %s: %zu vertices, %zu faces (grid TIN)\n", o.dem.c_str(), t.vertex_count(), t.faces.size());
-    std::printf("mesh             %s: %zu vertices, %zu faces\n", o.mesh.c_str(), s.vertex_count(), s.faces.size());
-    std::printf("validity         %zu faces not counter-clockwise, %zu bad edges, %zu faces over no-data\n",
-                mc.clockwise_or_flat, mc.bad_edges, over_nodata);
+    std::printf("dem              %s: %zu vertices, %zu faces (grid TIN)\n", o.dem.c_str(),
+                t.vertex_count(), t.faces.size());
+    std::printf("mesh             %s: %zu vertices, %zu faces\n", o.mesh.c_str(), s.vertex_count(),
+                s.faces.size());
+    std::printf(
+        "validity         %zu faces not counter-clockwise, %zu bad edges, %zu faces over no-data\n",
+        mc.clockwise_or_flat, mc.bad_edges, over_nodata);
     std::printf("coverage         mesh area / footprint area = %.9f\n", mc.area / footprint_area);
-    std::printf("vertical error   RMSE %.4f m, max %.4f m over %zu cell centres (%zu outside the mesh)\n",
-                rmse, vmax, measured, uncovered);
-    std::printf("steiner graphs   delta %.4f m: T %zu nodes (%.2f s), T' %zu nodes (%.2f s)\n", r.delta_m,
-                r.original_nodes, r.original_s, r.simplified_nodes, r.simplified_s);
+    std::printf(
+        "vertical error   RMSE %.4f m, max %.4f m over %zu cell centres (%zu outside the mesh)\n",
+        rmse, vmax, measured, uncovered);
+    std::printf("steiner graphs   delta %.4f m: T %zu nodes (%.2f s), T' %zu nodes (%.2f s)\n",
+                r.delta_m, r.original_nodes, r.original_s, r.simplified_nodes, r.simplified_s);
     for (std::size_t i = 0; i < r.set_errors.size(); ++i) {
       std::printf("distance error   set %zu: %.6f\n", i + 1, r.set_errors[i]);
     }
@@ -223,7 +234,8 @@ int run(const Options& o) {
   if (o.json) {
     std::ostringstream js;
     js << "{\"distance_error\":" << json_number(r.distance_error) << ",\"distance_error_sets\":[";
-    for (std::size_t i = 0; i < r.set_errors.size(); ++i) js << (i ? "," : "") << json_number(r.set_errors[i]);
+    for (std::size_t i = 0; i < r.set_errors.size(); ++i)
+      js << (i ? "," : "") << json_number(r.set_errors[i]);
     js << "],\"vertical_rmse\":" << json_number(rmse) << ",\"vertical_max\":" << json_number(vmax)
        << ",\"mesh_vertices\":" << s.vertex_count() << ",\"mesh_faces\":" << s.faces.size()
        << ",\"dem_vertices\":" << t.vertex_count() << ",\"dem_faces\":" << t.faces.size()
@@ -231,7 +243,8 @@ int run(const Options& o) {
        << ",\"delta_m\":" << json_number(r.delta_m) << ",\"steiner_nodes_dem\":" << r.original_nodes
        << ",\"steiner_nodes_mesh\":" << r.simplified_nodes << ",\"snapped_points\":" << r.snapped
        << ",\"faces_not_ccw\":" << mc.clockwise_or_flat << ",\"bad_edges\":" << mc.bad_edges
-       << ",\"faces_over_nodata\":" << over_nodata << ",\"coverage\":" << json_number(mc.area / footprint_area)
+       << ",\"faces_over_nodata\":" << over_nodata
+       << ",\"coverage\":" << json_number(mc.area / footprint_area)
        << ",\"cells_outside_mesh\":" << uncovered << ",\"threads\":" << threads
        << ",\"dem\":" << json_string(o.dem) << ",\"mesh\":" << json_string(o.mesh)
        << ",\"seconds_geodesics_dem\":" << json_number(r.original_s)

@@ -5,6 +5,8 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include <algorithm>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -40,7 +42,8 @@ int run(const dpts::cli::ParOptions& o) {
     return 0;
   }
   if (o.version) {
-    std::cout << "dpts-par " << DPTS_VERSION << " (GDAL " << GDALVersionInfo("RELEASE_NAME") << ")\n";
+    std::cout << "dpts-par " << DPTS_VERSION << " (GDAL " << GDALVersionInfo("RELEASE_NAME")
+              << ")\n";
     return 0;
   }
   const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
@@ -61,10 +64,15 @@ int run(const dpts::cli::ParOptions& o) {
   // The input is valid: now claim the output (fails early when it cannot be written).
   io::AtomicOutputFile out(o.output);
 
+  // A reprojected DEM's straight grid outline bends in the output CRS: merged outline edges may
+  // stray from it by at most 1 % of a cell, so no face reaches a void cell's centre.
+  core::EliminationOptions elimination = o.elimination;
+  elimination.outline_chord_ok = dem.outline_chord_test(
+      0.01 * dem.frame.metres_per_unit * std::min(1.0, std::fabs(dem.frame.m[1][1])));
   par::SimplifyStats stats;
   core::Tin tin;
   try {
-    tin = par::simplify_dem(dem.grid, dem.frame, o.elimination, o.keep, progress, &stats);
+    tin = par::simplify_dem(dem.grid, dem.frame, elimination, o.keep, progress, &stats);
   } catch (const std::invalid_argument& e) {
     throw InputError(o.input + ": " + e.what());
   }
@@ -96,7 +104,8 @@ int run(const dpts::cli::ParOptions& o) {
                           " --keep " + o.keep_text + " from " +
                           std::filesystem::path(o.input).filename().string());
   mesh.comments.push_back("crs " + (dem.output_wkt.empty() ? std::string("none") : dem.output_wkt));
-  io::write_ply(out.stream(), mesh, o.ascii ? io::PlyFormat::ascii : io::PlyFormat::binary_little_endian);
+  io::write_ply(out.stream(), mesh,
+                o.ascii ? io::PlyFormat::ascii : io::PlyFormat::binary_little_endian);
   if (g_cancel) throw Cancelled();
   out.commit();
 

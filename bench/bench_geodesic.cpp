@@ -39,7 +39,8 @@ const Setup* setup() {
       const double m = dem.frame.metres_per_unit;
       for (auto cell : grid.cells) {
         const int c = static_cast<int>(cell % 1000), r = static_cast<int>(cell / 1000);
-        out->mesh.xyz.insert(out->mesh.xyz.end(), {m * dem.frame.u(c, r), m * dem.frame.w(c, r), crop.z[cell]});
+        out->mesh.xyz.insert(out->mesh.xyz.end(),
+                             {m * dem.frame.u(c, r), m * dem.frame.w(c, r), crop.z[cell]});
       }
       out->mesh.faces = grid.faces;
       dpts::core::fix_orientation(out->mesh);
@@ -69,7 +70,8 @@ void BM_dijkstra_one_source(benchmark::State& state) {
   }
   const double nodes = static_cast<double>(s->graph->node_count());
   state.counters["graph_nodes"] = nodes;
-  state.counters["nodes/s"] = benchmark::Counter(nodes * state.iterations(), benchmark::Counter::kIsRate);
+  state.counters["nodes/s"] =
+      benchmark::Counter(nodes * state.iterations(), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_dijkstra_one_source)->Unit(benchmark::kMillisecond)->Iterations(3);
 

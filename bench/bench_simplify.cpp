@@ -44,17 +44,28 @@ void BM_simplify_dem(benchmark::State& state, dpts::core::Importance kind) {
     benchmark::DoNotOptimize(tin.faces.data());
   }
   const double cells = static_cast<double>(dem->grid.cell_count());
-  state.counters["cells/s"] = benchmark::Counter(cells * state.iterations(), benchmark::Counter::kIsRate);
-  state.counters["s_per_Mcell"] = benchmark::Counter(cells * state.iterations(),
-                                                 benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["cells/s"] =
+      benchmark::Counter(cells * state.iterations(), benchmark::Counter::kIsRate);
+  state.counters["s_per_Mcell"] = benchmark::Counter(
+      cells * state.iterations(), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.counters["s_per_Mcell"] = benchmark::Counter(
       cells * state.iterations() / 1e6, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 
 BENCHMARK_CAPTURE(BM_simplify_dem, vp, dpts::core::Importance::vp)
-    ->Arg(1)->Arg(2)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime()->MeasureProcessCPUTime();
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
 BENCHMARK_CAPTURE(BM_simplify_dem, pld, dpts::core::Importance::pld)
-    ->Arg(1)->Arg(2)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime()->MeasureProcessCPUTime();
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
 
 }  // namespace
 

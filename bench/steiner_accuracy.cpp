@@ -16,7 +16,8 @@ int main(int argc, char** argv) {
     const char* file;
     int c0, r0;
   };
-  const Crop crops[] = {{"st_helens_crater.tif", 39, 39}, {"san_gabriel_bigtujunga_utm11.tif", 600, 300}};
+  const Crop crops[] = {{"st_helens_crater.tif", 39, 39},
+                        {"san_gabriel_bigtujunga_utm11.tif", 600, 300}};
   std::printf("crop,delta_factor,delta_m,pairs,mean_rel_diff,max_rel_diff,min_rel_diff\n");
   for (const Crop& c : crops) {
     const auto mesh = dpts::test::dem_crop(data + "/" + c.file, c.c0, c.r0, 50);

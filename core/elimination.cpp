@@ -1,5 +1,6 @@
 // The elimination method on a CGAL Delaunay TIN, with VP or PLD importance
-// (Ben-Moshe et al., "Distance Preserving Terrain Simplification", sections 3.1, 4.1, 4.2).
+// ("Distance Preserving Terrain Simplification", the paper in ../shared/paper, sections 3.1,
+// 4.1 and 4.2).
 //
 // The footprint stays exact because every outline edge of the footprint between two
 // neighbouring cells is Delaunay in any subset of the grid's cells (an empty circle through
@@ -41,7 +42,7 @@ struct VertexInfo {
   std::uint32_t id = 0;     // surface vertex id
   std::uint32_t stamp = 0;  // last removal whose link held this vertex
   std::int32_t col = 0, row = 0;
-  double z = 0;             // height, metres
+  double z = 0;  // height, metres
 };
 using Vb = CGAL::Triangulation_vertex_base_with_info_2<VertexInfo, K>;
 using Fb = CGAL::Triangulation_face_base_with_info_2<FaceLabel, K>;
@@ -61,11 +62,11 @@ std::uint64_t mix_seed(std::uint64_t a, std::uint64_t b, std::uint64_t c) {
 
 // Per-call working memory of evaluate().
 struct Scratch {
-  std::vector<VertexHandle> ring;   // link of the vertex, counter-clockwise
-  std::vector<char> inside;         // inside[j]: face ring[j] -> ring[j+1] is in the footprint
-  std::vector<VertexHandle> poly;   // polygon to refill (whole ring or the inside chain)
-  std::vector<Point3> pts;          // poly in metres
-  std::vector<LinkTriangle> tris;   // refill triangles, indices into poly
+  std::vector<VertexHandle> ring;  // link of the vertex, counter-clockwise
+  std::vector<char> inside;        // inside[j]: face ring[j] -> ring[j+1] is in the footprint
+  std::vector<VertexHandle> poly;  // polygon to refill (whole ring or the inside chain)
+  std::vector<Point3> pts;         // poly in metres
+  std::vector<LinkTriangle> tris;  // refill triangles, indices into poly
   std::vector<std::pair<int, int>> todo;
 };
 
@@ -76,9 +77,9 @@ struct Eliminator::Impl {
   FootprintIndex footprint;
   GridFrame frame;
   EliminationOptions options;
-  std::vector<std::uint32_t> cells;      // surface vertex id -> cell index
-  std::vector<VertexHandle> handle;      // id -> vertex (null once removed)
-  std::vector<double> initial;           // importance from compute_importance()
+  std::vector<std::uint32_t> cells;        // surface vertex id -> cell index
+  std::vector<VertexHandle> handle;        // id -> vertex (null once removed)
+  std::vector<double> initial;             // importance from compute_importance()
   std::vector<std::uint32_t> evaluations;  // per-vertex counter, seeds Monte Carlo VP
   IndexedMinHeap heap;
   Delaunay dt;
@@ -149,7 +150,8 @@ struct Eliminator::Impl {
       s.inside.push_back(!dt.is_infinite(fc) && fc->info().inside == 1);
     } while (++fc != done);
     const std::size_t n = s.ring.size();
-    const std::size_t n_inside = static_cast<std::size_t>(std::count(s.inside.begin(), s.inside.end(), 1));
+    const std::size_t n_inside =
+        static_cast<std::size_t>(std::count(s.inside.begin(), s.inside.end(), 1));
     if (n_inside == 0) return kLocked;
 
     bool closed = n_inside == n;
@@ -174,6 +176,9 @@ struct Eliminator::Impl {
       const std::int64_t ax = a.col - c.col, ay = a.row - c.row;
       const std::int64_t bx = b.col - c.col, by = b.row - c.row;
       if (ax * by - ay * bx != 0 || ax * bx + ay * by >= 0) return kLocked;
+      if (options.outline_chord_ok && !options.outline_chord_ok(cells[a.id], cells[b.id])) {
+        return kLocked;
+      }
     }
     if (s.poly.size() < 3) return kLocked;
 

@@ -1,4 +1,4 @@
-// The elimination method (Ben-Moshe et al., section 3.1) on a Delaunay TIN of a DEM:
+// The elimination method (the DPTS paper, section 3.1) on a Delaunay TIN of a DEM:
 // repeatedly remove the least important vertex by Delaunay removal and update the
 // importance of the vertices whose star changed. Importance is VP (volume between the
 // surfaces before and after the removal) or PLD (local distance preservation).
@@ -24,6 +24,11 @@ struct EliminationOptions {
   VolumeMethod vp_volume = VolumeMethod::exact;  // exact: no noise, and faster (see README)
   int vp_samples = 100;                          // Monte Carlo points per VP evaluation
   std::uint64_t seed = 1;                        // Monte Carlo seed
+  // Whether the outline may run straight from cell a to cell b (both on one grid line, the
+  // cells between them on the outline). Null: always (the frame is the output CRS up to an
+  // affine map). For a reprojected DEM, a straight grid line bends in the output CRS, and the
+  // caller limits how far the chord may stray from it. Called concurrently: must be thread-safe.
+  std::function<bool(std::uint32_t cell_a, std::uint32_t cell_b)> outline_chord_ok;
 };
 
 // A TIN over a DEM: vertices are cells (row-major indices, ascending), faces index into

@@ -66,19 +66,24 @@ namespace {
 // in F (see footprint_contains_third).
 bool square_contains(int mask, int a, int b) {
   switch (mask) {
-    case 15: return true;
-    case 14: return a + b >= 3;  // (c,r) missing: triangle of the other three, fx + fy > 1
-    case 7:  return a + b < 3;   // (c+1,r+1) missing: fx + fy < 1
-    case 13: return b > a;       // (c+1,r) missing: fy > fx (eps^2 < eps on the diagonal)
-    case 11: return a >= b;      // (c,r+1) missing: fx > fy
-    default: return false;
+    case 15:
+      return true;
+    case 14:
+      return a + b >= 3;  // (c,r) missing: triangle of the other three, fx + fy > 1
+    case 7:
+      return a + b < 3;  // (c+1,r+1) missing: fx + fy < 1
+    case 13:
+      return b > a;  // (c+1,r) missing: fy > fx (eps^2 < eps on the diagonal)
+    case 11:
+      return a >= b;  // (c,r+1) missing: fx > fy
+    default:
+      return false;
   }
 }
 
 }  // namespace
 
-bool footprint_contains_third(const HeightGrid& grid, std::int64_t sum_col,
-                              std::int64_t sum_row) {
+bool footprint_contains_third(const HeightGrid& grid, std::int64_t sum_col, std::int64_t sum_row) {
   // note: with the push (+eps, +eps^2) a point on a grid line belongs to the square on its
   // right (below), so the square is simply the floor of the coordinates.
   const std::int64_t c = floor_div3(sum_col);

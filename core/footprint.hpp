@@ -7,8 +7,8 @@
 // cells and one-cell-wide strands carry no surface and are dropped.
 #pragma once
 
-#include <cstdint>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "core/grid.hpp"
@@ -22,8 +22,7 @@ std::vector<std::uint32_t> surface_cells(const HeightGrid& grid);
 // (+eps, +eps^2), lies inside F. With sums of the three corners of a triangle this is the
 // triangle's centroid: the push makes the answer exact and unambiguous on grid lines, so a
 // triangle that does not cross the outline of F is classified without rounding.
-bool footprint_contains_third(const HeightGrid& grid, std::int64_t sum_col,
-                              std::int64_t sum_row);
+bool footprint_contains_third(const HeightGrid& grid, std::int64_t sum_col, std::int64_t sum_row);
 
 // Precomputed valid-corner masks of all grid squares, for fast repeated
 // footprint_contains_third() tests (one byte per cell).

@@ -16,8 +16,7 @@ struct HeightGrid {
   std::vector<double> z;
 
   bool is_valid(int col, int row) const {
-    return col >= 0 && row >= 0 && col < width && row < height &&
-           !std::isnan(z[index(col, row)]);
+    return col >= 0 && row >= 0 && col < width && row < height && !std::isnan(z[index(col, row)]);
   }
   std::size_t index(int col, int row) const {
     return static_cast<std::size_t>(row) * static_cast<std::size_t>(width) +

@@ -1,4 +1,4 @@
-// VP and PLD importance of a vertex (Ben-Moshe et al., sections 4.1 and 4.2).
+// VP and PLD importance of a vertex (the DPTS paper, sections 4.1 and 4.2).
 #include "core/importance.hpp"
 
 #include <algorithm>
@@ -87,7 +87,6 @@ double triangle_area(P2 a, P2 b, P2 c) { return 0.5 * cross(a, b, c); }
 
 std::size_t fan_count(const Star& s) { return s.closed ? s.n : s.n - 1; }
 
-
 // Height of the surface `tris` (over points pts) at (x, y), or NaN when outside all.
 double height_in(const std::vector<std::array<const Point3*, 3>>& tris, double x, double y) {
   for (const auto& t : tris) {
@@ -162,13 +161,14 @@ double vp_volume_exact(const Star& s, const std::vector<LinkTriangle>& after) {
   return volume;
 }
 
-double vp_volume_monte_carlo(const Star& s, const std::vector<LinkTriangle>& after,
-                             int samples, std::uint64_t seed) {
+double vp_volume_monte_carlo(const Star& s, const std::vector<LinkTriangle>& after, int samples,
+                             std::uint64_t seed) {
   std::vector<std::array<const Point3*, 3>> before_tris, after_tris;
   for (std::size_t i = 0; i < fan_count(s); ++i) {
     before_tris.push_back({&s.apex, &s.link[i], &s.link[(i + 1) % s.n]});
   }
-  for (const LinkTriangle& t : after) after_tris.push_back({&s.link[t[0]], &s.link[t[1]], &s.link[t[2]]});
+  for (const LinkTriangle& t : after)
+    after_tris.push_back({&s.link[t[0]], &s.link[t[1]], &s.link[t[2]]});
   // The box B bounds both surfaces over the bounding rectangle of the affected vertices.
   double x0 = s.apex.x, x1 = s.apex.x, y0 = s.apex.y, y1 = s.apex.y, z0 = s.apex.z, z1 = s.apex.z;
   for (std::size_t i = 0; i < s.n; ++i) {
@@ -196,7 +196,8 @@ double vp_volume_monte_carlo(const Star& s, const std::vector<LinkTriangle>& aft
 namespace {
 
 double dist3(const Point3& a, const Point3& b) {
-  return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) + (a.z - b.z) * (a.z - b.z));
+  return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) +
+                   (a.z - b.z) * (a.z - b.z));
 }
 
 // Shortest path from link[from] over `steps` fan triangles to the link vertex reached going
@@ -205,8 +206,8 @@ double dist3(const Point3& a, const Point3& b) {
 // path runs through the apex; otherwise it is the taut string from one end to the other,
 // bent round the link vertices that poke towards the apex (a convex chain).
 double fan_geodesic(const Star& s, const std::vector<double>& radius,
-                    const std::vector<double>& angle, std::size_t from, std::size_t steps,
-                    int dir, std::vector<P2>& chain) {
+                    const std::vector<double>& angle, std::size_t from, std::size_t steps, int dir,
+                    std::vector<P2>& chain) {
   const auto step = [&](std::size_t i) { return dir > 0 ? (i + 1) % s.n : (i + s.n - 1) % s.n; };
   const auto face = [&](std::size_t i) { return dir > 0 ? i : (i + s.n - 1) % s.n; };
   double total = 0.0;

@@ -1,5 +1,5 @@
 // Vertex importance for the elimination method: VP (volume preserving) and PLD (preserving
-// local distances), after Ben-Moshe et al., "Distance Preserving Terrain Simplification: An
+// local distances), after "Distance Preserving Terrain Simplification: An
 // Experimental Study", sections 4.1 and 4.2. Pure geometry on a vertex star; no CGAL.
 #pragma once
 
@@ -38,8 +38,8 @@ double vp_volume_exact(const Star& star, const std::vector<LinkTriangle>& after)
 // VP, the paper's Monte Carlo estimate: `samples` points uniform in the box bounding both
 // surfaces over the link's bounding rectangle; volume = box volume * share of the points that
 // lie between the two surfaces. `seed` fixes the points (deterministic).
-double vp_volume_monte_carlo(const Star& star, const std::vector<LinkTriangle>& after,
-                             int samples, std::uint64_t seed);
+double vp_volume_monte_carlo(const Star& star, const std::vector<LinkTriangle>& after, int samples,
+                             std::uint64_t seed);
 
 // PLD: 1 - min over pairs of link vertices (v, w) of ED(v, w) / GD(v, w), in [0, 1]. ED is
 // the 3D Euclidean distance; GD is the exact geodesic distance between v and w restricted

@@ -7,8 +7,11 @@
 
 namespace dpts::core {
 
-// Items are ids in [0, capacity). Equal priorities are ordered by id, so the order of pops is
-// fully determined by the keys (deterministic tie-breaking).
+// Items are ids in [0, capacity). Equal priorities are ordered by a fixed bijective scramble of
+// the id, so the order of pops is fully determined by the keys (deterministic tie-breaking).
+// note: scrambling, not the plain id, matters for elimination: on flat ground every vertex ties
+// at importance 0, and removing them in row-major order sweeps a front across the DEM whose
+// vertices gain thousands of neighbours; a scattered order keeps degrees near 6.
 class IndexedMinHeap {
  public:
   static constexpr std::uint32_t kAbsent = std::numeric_limits<std::uint32_t>::max();
@@ -57,6 +60,16 @@ class IndexedMinHeap {
     sift_down(pos_[last.id]);
   }
 
+  // A bijection of 32-bit ids (MurmurHash3's finaliser): the tie order.
+  static std::uint32_t scramble(std::uint32_t x) {
+    x ^= x >> 16;
+    x *= 0x85EBCA6Bu;
+    x ^= x >> 13;
+    x *= 0xC2B2AE35u;
+    x ^= x >> 16;
+    return x;
+  }
+
   std::uint32_t pop() {
     const std::uint32_t id = heap_.front().id;
     erase(id);
@@ -71,7 +84,7 @@ class IndexedMinHeap {
     std::uint32_t id;
   };
   static bool less(const Entry& a, const Entry& b) {
-    return a.key < b.key || (a.key == b.key && a.id < b.id);
+    return a.key < b.key || (a.key == b.key && scramble(a.id) < scramble(b.id));
   }
   void place(std::size_t i, const Entry& e) {
     heap_[i] = e;

@@ -12,10 +12,10 @@ namespace dpts::core {
 
 struct MeshCheck {
   std::size_t faces = 0;
-  std::size_t clockwise_or_flat = 0;    // faces not strictly counter-clockwise in x, y
-  std::size_t bad_edges = 0;            // edges used twice in one direction or by > 2 faces
-  std::size_t boundary_edges = 0;       // edges used by exactly one face
-  double area = 0.0;                    // sum of signed face areas in x, y
+  std::size_t clockwise_or_flat = 0;  // faces not strictly counter-clockwise in x, y
+  std::size_t bad_edges = 0;          // edges used twice in one direction or by > 2 faces
+  std::size_t boundary_edges = 0;     // edges used by exactly one face
+  double area = 0.0;                  // sum of signed face areas in x, y
 };
 
 // Counter-clockwise faces whose interior edges are each shared by exactly two faces in

@@ -1,4 +1,4 @@
-// Per-piece budgets of PLD'/VP' (Ben-Moshe et al., section 4.3) with exact totals.
+// Per-piece budgets of PLD'/VP' (the DPTS paper, section 4.3) with exact totals.
 #include "core/piece_budget.hpp"
 
 #include <algorithm>
@@ -12,8 +12,10 @@ std::vector<std::size_t> piece_budgets(const std::vector<std::size_t>& counts,
                                        const std::vector<double>& values, double p2l,
                                        std::size_t min_keep) {
   const std::size_t m = counts.size();
-  if (values.size() != m || m == 0) throw std::invalid_argument("piece_budgets: counts and values differ");
-  const double total_n = static_cast<double>(std::accumulate(counts.begin(), counts.end(), std::size_t{0}));
+  if (values.size() != m || m == 0)
+    throw std::invalid_argument("piece_budgets: counts and values differ");
+  const double total_n =
+      static_cast<double>(std::accumulate(counts.begin(), counts.end(), std::size_t{0}));
   double s = 0;
   for (double v : values) s += v * v;
   // Lower and upper bounds per piece, and the exact total to reach.

@@ -1,4 +1,4 @@
-// Per-piece vertex budgets of the meta method PLD'/VP' (Ben-Moshe et al., section 4.3):
+// Per-piece vertex budgets of the meta method PLD'/VP' (the DPTS paper, section 4.3):
 //   P2L_i = 100 - value_i^2 / S * m * (100 - P2L),   S = sum of value_j^2 over the m pieces,
 // where value_i is the piece's mean ED/GD ratio. Flat pieces (value near 1) keep fewer vertices.
 #pragma once

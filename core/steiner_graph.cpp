@@ -1,4 +1,4 @@
-// The Steiner graph of a TIN and Dijkstra queries on it (Ben-Moshe et al., section 2.1).
+// The Steiner graph of a TIN and Dijkstra queries on it (the DPTS paper, section 2.1).
 #include "core/steiner_graph.hpp"
 
 #include <algorithm>
@@ -63,7 +63,8 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
       face_edges_[std::get<1>(e[i])][std::get<2>(e[i])] = edge;
     }
     edge_faces_.push_back(faces);
-    edge_ends_.push_back({static_cast<std::uint32_t>(key >> 32), static_cast<std::uint32_t>(key & 0xFFFFFFFFu)});
+    edge_ends_.push_back(
+        {static_cast<std::uint32_t>(key >> 32), static_cast<std::uint32_t>(key & 0xFFFFFFFFu)});
     // floor(len / delta) points evenly inside the edge.
     const double* a = &mesh.xyz[3 * (key >> 32)];
     const double* b = &mesh.xyz[3 * (key & 0xFFFFFFFFu)];

@@ -1,5 +1,5 @@
-// Geodesic distances on a TIN approximated on the Steiner graph of Ben-Moshe et al.,
-// "Distance Preserving Terrain Simplification", section 2.1: floor(len(e)/delta) points inside
+// Geodesic distances on a TIN approximated on the Steiner graph of "Distance Preserving Terrain
+// Simplification" (the paper in ../shared/paper), section 2.1: floor(len(e)/delta) points inside
 // every edge e, and inside every triangle a straight segment between every pair of points on its
 // boundary (corners included). The graph is implicit: a triangle's clique is generated when
 // Dijkstra reaches it, so memory is linear in the number of Steiner points.
@@ -89,12 +89,13 @@ class SteinerGraph {
  private:
   const TriMesh& mesh_;
   double delta_;
-  std::vector<double> pos_;                             // node positions, vertices first
+  std::vector<double> pos_;                               // node positions, vertices first
   std::vector<std::array<std::uint32_t, 3>> face_edges_;  // edge of (v0,v1), (v1,v2), (v2,v0)
   std::vector<std::array<std::uint32_t, 2>> edge_faces_;
-  std::vector<std::uint32_t> edge_first_;               // first Steiner node of each edge, + end
-  std::vector<std::array<std::uint32_t, 2>> edge_ends_;  // (lower, higher) vertex; nodes run low -> high
-  std::vector<std::uint32_t> node_edge_;                // Steiner node - vertex_count -> edge
+  std::vector<std::uint32_t> edge_first_;  // first Steiner node of each edge, + end
+  std::vector<std::array<std::uint32_t, 2>>
+      edge_ends_;                         // (lower, higher) vertex; nodes run low -> high
+  std::vector<std::uint32_t> node_edge_;  // Steiner node - vertex_count -> edge
   std::vector<std::uint32_t> vertex_face_first_, vertex_faces_;  // CSR vertex -> faces
 };
 

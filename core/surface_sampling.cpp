@@ -11,7 +11,6 @@
 namespace dpts::core {
 namespace {
 
-
 double cross2(const double* a, const double* b, const double* c) {
   return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
 }
@@ -86,8 +85,8 @@ std::vector<SurfacePoint> sample_uniform(const TriMesh& m, std::size_t count, st
   std::vector<SurfacePoint> pts;
   for (std::size_t k = 0; k < count && total > 0; ++k) {
     const double u = rng.uniform() * total;
-    const auto f = static_cast<std::uint32_t>(
-        std::min<std::size_t>(std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin(), cdf.size() - 1));
+    const auto f = static_cast<std::uint32_t>(std::min<std::size_t>(
+        std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin(), cdf.size() - 1));
     // Uniform in the triangle: reflect the unit square's upper half.
     double r1 = rng.uniform(), r2 = rng.uniform();
     if (r1 + r2 > 1) r1 = 1 - r1, r2 = 1 - r2;
@@ -121,10 +120,13 @@ PointLocator::PointLocator(const TriMesh& mesh) : mesh_(mesh) {
       fx0 = std::min(fx0, mesh.xyz[3 * v]), fx1 = std::max(fx1, mesh.xyz[3 * v]);
       fy0 = std::min(fy0, mesh.xyz[3 * v + 1]), fy1 = std::max(fy1, mesh.xyz[3 * v + 1]);
     }
-    const int i0 = static_cast<int>((fx0 - x0_) / cell_), i1 = static_cast<int>((fx1 - x0_) / cell_);
-    const int j0 = static_cast<int>((fy0 - y0_) / cell_), j1 = static_cast<int>((fy1 - y0_) / cell_);
+    const int i0 = static_cast<int>((fx0 - x0_) / cell_),
+              i1 = static_cast<int>((fx1 - x0_) / cell_);
+    const int j0 = static_cast<int>((fy0 - y0_) / cell_),
+              j1 = static_cast<int>((fy1 - y0_) / cell_);
     for (int j = j0; j <= j1; ++j) {
-      for (int i = i0; i <= i1; ++i) entries.emplace_back(static_cast<std::uint32_t>(j * nx_ + i), f);
+      for (int i = i0; i <= i1; ++i)
+        entries.emplace_back(static_cast<std::uint32_t>(j * nx_ + i), f);
     }
   }
   std::sort(entries.begin(), entries.end());
@@ -153,12 +155,15 @@ std::optional<PointLocator::Hit> PointLocator::locate(double x, double y, double
         const double area = cross2(a, bb, c);
         const double tol = -1e-12 * std::fabs(area);
         if (i == ci && j == cj && cross2(a, bb, p) * (area > 0 ? 1 : -1) >= tol &&
-            cross2(bb, c, p) * (area > 0 ? 1 : -1) >= tol && cross2(c, a, p) * (area > 0 ? 1 : -1) >= tol) {
+            cross2(bb, c, p) * (area > 0 ? 1 : -1) >= tol &&
+            cross2(c, a, p) * (area > 0 ? 1 : -1) >= tol) {
           return Hit{lift(mesh_, f, x, y), false};
         }
         if (snap > 0) {
-          const double d2 = std::min({segment_dist2(p, a, bb), segment_dist2(p, bb, c), segment_dist2(p, c, a)});
-          if (d2 <= best_d2 && (!nearest || d2 < best_d2 || f < *nearest)) best_d2 = d2, nearest = f;
+          const double d2 =
+              std::min({segment_dist2(p, a, bb), segment_dist2(p, bb, c), segment_dist2(p, c, a)});
+          if (d2 <= best_d2 && (!nearest || d2 < best_d2 || f < *nearest))
+            best_d2 = d2, nearest = f;
         }
       }
     }
@@ -173,7 +178,8 @@ std::optional<PointLocator::Hit> PointLocator::locate(double x, double y, double
     const double* b = q[(e + 1) % 3];
     const double dx = b[0] - a[0], dy = b[1] - a[1];
     const double len2 = dx * dx + dy * dy;
-    const double t = len2 > 0 ? std::clamp(((x - a[0]) * dx + (y - a[1]) * dy) / len2, 0.0, 1.0) : 0.0;
+    const double t =
+        len2 > 0 ? std::clamp(((x - a[0]) * dx + (y - a[1]) * dy) / len2, 0.0, 1.0) : 0.0;
     const double px = a[0] + t * dx, py = a[1] + t * dy;
     const double d2 = (px - x) * (px - x) + (py - y) * (py - y);
     if (d2 < sd2) sd2 = d2, sx = px, sy = py;

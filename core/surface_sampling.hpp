@@ -26,7 +26,8 @@ GridTin grid_tin(const HeightGrid& grid);
 void fix_orientation(TriMesh& mesh);
 
 // `count` points uniform in the area of the mesh (in x, y), seeded; z lifted onto the mesh.
-std::vector<SurfacePoint> sample_uniform(const TriMesh& mesh, std::size_t count, std::uint64_t seed);
+std::vector<SurfacePoint> sample_uniform(const TriMesh& mesh, std::size_t count,
+                                         std::uint64_t seed);
 
 // Locates points in a mesh's faces (in x, y) with a bucket grid.
 class PointLocator {

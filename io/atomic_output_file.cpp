@@ -13,7 +13,8 @@
 
 namespace dpts::io {
 
-AtomicOutputFile::AtomicOutputFile(std::filesystem::path final_path) : final_(std::move(final_path)) {
+AtomicOutputFile::AtomicOutputFile(std::filesystem::path final_path)
+    : final_(std::move(final_path)) {
   const auto dir = final_.has_parent_path() ? final_.parent_path() : std::filesystem::path(".");
   std::string pattern = (dir / ("." + final_.filename().string() + ".partial-XXXXXX")).string();
   std::vector<char> name(pattern.begin(), pattern.end());
@@ -57,7 +58,8 @@ void AtomicOutputFile::commit() {
   ::chmod(temp_.c_str(), 0666 & ~mask);
   std::error_code ec;
   std::filesystem::rename(temp_, final_, ec);
-  if (ec) throw IoError(final_.string() + ": cannot rename output into place (" + ec.message() + ")");
+  if (ec)
+    throw IoError(final_.string() + ": cannot rename output into place (" + ec.message() + ")");
   committed_ = true;
 }
 

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <memory>
 
 #include "core/errors.hpp"
 
@@ -68,7 +69,8 @@ std::vector<double> Dem::output_xy(const std::vector<std::uint32_t>& cells) cons
   }
   if (to_output) {
     std::vector<int> ok(cells.size(), 0);
-    if (!to_output->Transform(static_cast<int>(cells.size()), x.data(), y.data(), nullptr, ok.data()) ||
+    if (!to_output->Transform(static_cast<int>(cells.size()), x.data(), y.data(), nullptr,
+                              ok.data()) ||
         std::find(ok.begin(), ok.end(), 0) != ok.end()) {
       throw IoError(path + ": cannot transform cell centres to " + output_crs_name + " (" +
                     last_gdal_error() + ")");
@@ -85,9 +87,11 @@ std::vector<double> Dem::grid_xy(const std::vector<double>& output_xy) const {
   for (std::size_t i = 0; i < n; ++i) x[i] = output_xy[2 * i], y[i] = output_xy[2 * i + 1];
   if (from_output) {
     std::vector<int> ok(n, 0);
-    if (n > 0 && (!from_output->Transform(static_cast<int>(n), x.data(), y.data(), nullptr, ok.data()) ||
-                  std::find(ok.begin(), ok.end(), 0) != ok.end())) {
-      throw IoError(path + ": cannot transform points from " + output_crs_name + " to the DEM's CRS");
+    if (n > 0 &&
+        (!from_output->Transform(static_cast<int>(n), x.data(), y.data(), nullptr, ok.data()) ||
+         std::find(ok.begin(), ok.end(), 0) != ok.end())) {
+      throw IoError(path + ": cannot transform points from " + output_crs_name +
+                    " to the DEM's CRS");
     }
   }
   // Invert the geotransform: (x - gt0, y - gt3) = A (col + 0.5, row + 0.5).
@@ -102,13 +106,59 @@ std::vector<double> Dem::grid_xy(const std::vector<double>& output_xy) const {
   return grid;
 }
 
+std::function<bool(std::uint32_t, std::uint32_t)> Dem::outline_chord_test(
+    double tolerance_m) const {
+  if (!to_output) return nullptr;
+  // Outline cells: valid cells with a no-data or missing 8-neighbour. Their exact positions.
+  const core::HeightGrid& g = grid;
+  std::vector<std::uint32_t> outline;
+  for (int r = 0; r < g.height; ++r) {
+    for (int c = 0; c < g.width; ++c) {
+      if (!g.is_valid(c, r)) continue;
+      bool edge = false;
+      for (int dr = -1; dr <= 1 && !edge; ++dr) {
+        for (int dc = -1; dc <= 1 && !edge; ++dc) edge = !g.is_valid(c + dc, r + dr);
+      }
+      if (edge) outline.push_back(static_cast<std::uint32_t>(g.index(c, r)));
+    }
+  }
+  auto xy = std::make_shared<const std::vector<double>>(output_xy(outline));
+  auto cells = std::make_shared<const std::vector<std::uint32_t>>(std::move(outline));
+  const double unit_m = metres_per_output_unit;
+  const int width = g.width;
+  return [xy, cells, width, unit_m, tolerance_m](std::uint32_t a, std::uint32_t b) {
+    auto position = [&](std::uint32_t cell, double& x, double& y) {
+      const auto it = std::lower_bound(cells->begin(), cells->end(), cell);
+      if (it == cells->end() || *it != cell) return false;
+      const std::size_t i = static_cast<std::size_t>(it - cells->begin());
+      x = (*xy)[2 * i], y = (*xy)[2 * i + 1];
+      return true;
+    };
+    const long ca = static_cast<long>(a % width), ra = static_cast<long>(a / width);
+    const long cb = static_cast<long>(b % width), rb = static_cast<long>(b / width);
+    const long steps = std::max(std::labs(cb - ca), std::labs(rb - ra));
+    if (steps < 2) return true;
+    // The cell halfway along the grid line (a and b lie on one row, column or diagonal).
+    const long half = steps / 2;
+    const auto mid = static_cast<std::uint32_t>((ra + (rb - ra) / steps * half) * width +
+                                                (ca + (cb - ca) / steps * half));
+    double xa, ya, xb, yb, xm, ym;
+    if (!position(a, xa, ya) || !position(b, xb, yb) || !position(mid, xm, ym)) return false;
+    const double dx = xb - xa, dy = yb - ya;
+    const double len = std::hypot(dx, dy);
+    const double off = len > 0 ? std::fabs(dx * (ym - ya) - dy * (xm - xa)) / len : 0.0;
+    return off * unit_m <= tolerance_m;
+  };
+}
+
 Dem read_dem(const std::string& path, const DemReadOptions& options,
              const core::Progress& progress) {
   Dem dem;
   dem.path = path;
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(path + ": no such file");
-  if (std::filesystem::is_directory(path, ec)) throw InputError(path + ": is a directory, not a raster");
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(path + ": is a directory, not a raster");
 
   CPLErrorReset();
   std::unique_ptr<GDALDataset, DatasetCloser> ds(
@@ -129,7 +179,8 @@ Dem read_dem(const std::string& path, const DemReadOptions& options,
                      " cells is too many for one piece (limit 2^32)");
   }
   if (ds->GetRasterCount() > 1) {
-    dem.notes.push_back(path + ": " + std::to_string(ds->GetRasterCount()) + " bands; using band 1");
+    dem.notes.push_back(path + ": " + std::to_string(ds->GetRasterCount()) +
+                        " bands; using band 1");
   }
   double* gt = dem.geotransform;
   const bool has_gt = ds->GetGeoTransform(gt) == CE_None;
@@ -180,6 +231,7 @@ Dem read_dem(const std::string& path, const DemReadOptions& options,
     dem.output_wkt = out ? out : "";
     CPLFree(out);
     const double unit_m = dst.IsProjected() ? dst.GetLinearUnits() : 1.0;
+    dem.metres_per_output_unit = unit_m;
     if (transform) {
       dem.to_output.reset(OGRCreateCoordinateTransformation(&src, &dst));
       dem.from_output.reset(OGRCreateCoordinateTransformation(&dst, &src));
@@ -239,8 +291,8 @@ Dem read_dem(const std::string& path, const DemReadOptions& options,
   }
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (double& z : dem.grid.z) {
-    const bool is_nodata = has_nodata && (float32 ? static_cast<float>(z) == static_cast<float>(nodata)
-                                                  : z == nodata);
+    const bool is_nodata =
+        has_nodata && (float32 ? static_cast<float>(z) == static_cast<float>(nodata) : z == nodata);
     if (is_nodata || !std::isfinite(z)) {
       z = nan;
     } else {

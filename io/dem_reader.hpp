@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -27,11 +28,12 @@ struct TransformDeleter {
 struct Dem {
   std::string path;
   core::HeightGrid grid;
-  core::GridFrame frame;             // metric frame of the grid (see core/grid.hpp)
-  std::string output_wkt;            // CRS of the output coordinates; empty if the DEM has none
-  std::string output_crs_name;       // short name for messages
-  std::vector<std::string> notes;    // what the user should know (CRS choices, warnings)
+  core::GridFrame frame;           // metric frame of the grid (see core/grid.hpp)
+  std::string output_wkt;          // CRS of the output coordinates; empty if the DEM has none
+  std::string output_crs_name;     // short name for messages
+  std::vector<std::string> notes;  // what the user should know (CRS choices, warnings)
   std::size_t valid_cells = 0;
+  double metres_per_output_unit = 1.0;
   double geotransform[6] = {0, 1, 0, 0, 0, -1};
   std::unique_ptr<OGRCoordinateTransformation, TransformDeleter> to_output;  // null: identity
 
@@ -44,6 +46,13 @@ struct Dem {
   std::vector<double> grid_xy(const std::vector<double>& output_xy) const;
 
   std::unique_ptr<OGRCoordinateTransformation, TransformDeleter> from_output;  // null: identity
+
+  // For a reprojected DEM (to_output set): a thread-safe test for core's outline rule. It
+  // accepts the straight outline chord from cell a to cell b when the exact projection of the
+  // outline cell halfway between them lies within tolerance_m of the chord (the grid line is
+  // a smooth curve in the output CRS, farthest from its chord near the middle). Null for a DEM
+  // whose frame is exact. Precomputes the output positions of all outline cells.
+  std::function<bool(std::uint32_t, std::uint32_t)> outline_chord_test(double tolerance_m) const;
 };
 
 // Reads band 1 of `path`. No-data cells, NaN and infinite heights become NaN. Checks the

@@ -104,9 +104,9 @@ enum class Type { i8, u8, i16, u16, i32, u32, f32, f64 };
 
 Type parse_type(const std::string& t, const std::string& name) {
   static const std::map<std::string, Type> types = {
-      {"char", Type::i8},   {"int8", Type::i8},     {"uchar", Type::u8},  {"uint8", Type::u8},
+      {"char", Type::i8},   {"int8", Type::i8},     {"uchar", Type::u8},   {"uint8", Type::u8},
       {"short", Type::i16}, {"int16", Type::i16},   {"ushort", Type::u16}, {"uint16", Type::u16},
-      {"int", Type::i32},   {"int32", Type::i32},   {"uint", Type::u32},  {"uint32", Type::u32},
+      {"int", Type::i32},   {"int32", Type::i32},   {"uint", Type::u32},   {"uint32", Type::u32},
       {"float", Type::f32}, {"float32", Type::f32}, {"double", Type::f64}, {"float64", Type::f64}};
   const auto it = types.find(t);
   if (it == types.end()) throw InputError(name + ": unknown PLY type '" + t + "'");
@@ -115,10 +115,18 @@ Type parse_type(const std::string& t, const std::string& name) {
 
 std::size_t type_size(Type t) {
   switch (t) {
-    case Type::i8: case Type::u8: return 1;
-    case Type::i16: case Type::u16: return 2;
-    case Type::i32: case Type::u32: case Type::f32: return 4;
-    case Type::f64: return 8;
+    case Type::i8:
+    case Type::u8:
+      return 1;
+    case Type::i16:
+    case Type::u16:
+      return 2;
+    case Type::i32:
+    case Type::u32:
+    case Type::f32:
+      return 4;
+    case Type::f64:
+      return 8;
   }
   return 0;
 }
@@ -143,14 +151,46 @@ double read_binary(std::istream& in, Type t, bool big_endian, const std::string&
   if (!in.read(b, static_cast<std::streamsize>(n))) throw InputError(name + ": truncated PLY data");
   if (big_endian == host_is_little_endian()) std::reverse(b, b + n);
   switch (t) {
-    case Type::i8: { std::int8_t v; std::memcpy(&v, b, 1); return v; }
-    case Type::u8: { std::uint8_t v; std::memcpy(&v, b, 1); return v; }
-    case Type::i16: { std::int16_t v; std::memcpy(&v, b, 2); return v; }
-    case Type::u16: { std::uint16_t v; std::memcpy(&v, b, 2); return v; }
-    case Type::i32: { std::int32_t v; std::memcpy(&v, b, 4); return v; }
-    case Type::u32: { std::uint32_t v; std::memcpy(&v, b, 4); return v; }
-    case Type::f32: { float v; std::memcpy(&v, b, 4); return v; }
-    case Type::f64: { double v; std::memcpy(&v, b, 8); return v; }
+    case Type::i8: {
+      std::int8_t v;
+      std::memcpy(&v, b, 1);
+      return v;
+    }
+    case Type::u8: {
+      std::uint8_t v;
+      std::memcpy(&v, b, 1);
+      return v;
+    }
+    case Type::i16: {
+      std::int16_t v;
+      std::memcpy(&v, b, 2);
+      return v;
+    }
+    case Type::u16: {
+      std::uint16_t v;
+      std::memcpy(&v, b, 2);
+      return v;
+    }
+    case Type::i32: {
+      std::int32_t v;
+      std::memcpy(&v, b, 4);
+      return v;
+    }
+    case Type::u32: {
+      std::uint32_t v;
+      std::memcpy(&v, b, 4);
+      return v;
+    }
+    case Type::f32: {
+      float v;
+      std::memcpy(&v, b, 4);
+      return v;
+    }
+    case Type::f64: {
+      double v;
+      std::memcpy(&v, b, 8);
+      return v;
+    }
   }
   return 0;
 }
@@ -171,7 +211,8 @@ double read_ascii(std::istream& in, const std::string& name) {
 Mesh read_ply(std::istream& in, const std::string& name) {
   Mesh mesh;
   std::string line;
-  if (!std::getline(in, line) || line.substr(0, 3) != "ply") throw InputError(name + ": not a PLY file");
+  if (!std::getline(in, line) || line.substr(0, 3) != "ply")
+    throw InputError(name + ": not a PLY file");
   std::string format;
   std::vector<Element> elements;
   for (;;) {
@@ -261,7 +302,8 @@ Mesh read_ply(std::istream& in, const std::string& name) {
           for (int m = 0; m < 3; ++m) {
             const double idx = value(p.type);
             if (!(idx >= 0 && idx < static_cast<double>(mesh.vertex_count()))) {
-              throw InputError(name + ": face " + std::to_string(i) + " has vertex index out of range");
+              throw InputError(name + ": face " + std::to_string(i) +
+                               " has vertex index out of range");
             }
             f[m] = static_cast<std::uint32_t>(idx);
           }

@@ -10,9 +10,9 @@
 namespace dpts::io {
 
 struct Mesh {
-  std::vector<double> xyz;                            // x0, y0, z0, x1, ...
-  std::vector<std::array<std::uint32_t, 3>> faces;    // counter-clockwise seen from above
-  std::vector<std::string> comments;                  // header comments, in order
+  std::vector<double> xyz;                          // x0, y0, z0, x1, ...
+  std::vector<std::array<std::uint32_t, 3>> faces;  // counter-clockwise seen from above
+  std::vector<std::string> comments;                // header comments, in order
 
   std::size_t vertex_count() const { return xyz.size() / 3; }
 };

@@ -23,7 +23,8 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
   // (straight-line distance): every query then stops at about its nearest half of the points
   // instead of the farthest, which roughly halves the area searched.
   auto d2 = [&](std::size_t i, std::size_t j) {
-    const double dx = points[i].x - points[j].x, dy = points[i].y - points[j].y, dz = points[i].z - points[j].z;
+    const double dx = points[i].x - points[j].x, dy = points[i].y - points[j].y,
+                 dz = points[i].z - points[j].z;
     return dx * dx + dy * dy + dz * dz;
   };
   std::vector<std::vector<std::size_t>> rank(k, std::vector<std::size_t>(k, 0));
@@ -50,22 +51,23 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
   }
   tbb::enumerable_thread_specific<std::unique_ptr<core::GeodesicQuery>> queries;
   // note: grain 1: query costs differ a lot; let the scheduler balance them.
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, k, 1), [&](const tbb::blocked_range<std::size_t>& r) {
-    auto& q = queries.local();
-    if (!q) q = std::make_unique<core::GeodesicQuery>(graph);
-    std::vector<core::SurfacePoint> targets;
-    std::vector<double> d;
-    for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      if (assigned[i].empty()) continue;
-      targets.clear();
-      for (std::size_t j : assigned[i]) targets.push_back(points[j]);
-      q->distances(points[i], targets, d);
-      for (std::size_t t = 0; t < assigned[i].size(); ++t) {
-        const std::size_t j = assigned[i][t];
-        out[std::min(i, j) * k + std::max(i, j)] = d[t];
-      }
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, k, 1),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      auto& q = queries.local();
+                      if (!q) q = std::make_unique<core::GeodesicQuery>(graph);
+                      std::vector<core::SurfacePoint> targets;
+                      std::vector<double> d;
+                      for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                        if (assigned[i].empty()) continue;
+                        targets.clear();
+                        for (std::size_t j : assigned[i]) targets.push_back(points[j]);
+                        q->distances(points[i], targets, d);
+                        for (std::size_t t = 0; t < assigned[i].size(); ++t) {
+                          const std::size_t j = assigned[i][t];
+                          out[std::min(i, j) * k + std::max(i, j)] = d[t];
+                        }
+                      }
+                    });
   return out;
 }
 
@@ -86,7 +88,8 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
   const core::PointLocator locate_s(simplified);
   const auto k = static_cast<std::size_t>(options.points);
   for (int set = 0; set < options.sets; ++set) {
-    const std::uint64_t seed = options.seed * 0x9E3779B97F4A7C15ull + static_cast<std::uint64_t>(set) + 1;
+    const std::uint64_t seed =
+        options.seed * 0x9E3779B97F4A7C15ull + static_cast<std::uint64_t>(set) + 1;
     const std::vector<core::SurfacePoint> on_t = core::sample_uniform(original, k, seed);
     std::vector<core::SurfacePoint> on_s;
     std::size_t outside = 0;
@@ -100,10 +103,12 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
       on_s.push_back(hit->point);
     }
     if (outside > 0) {
-      throw InputError(std::to_string(outside) + " of " + std::to_string(k) + " sample points of set " +
-                       std::to_string(set + 1) + " lie outside the mesh's footprint");
+      throw InputError(std::to_string(outside) + " of " + std::to_string(k) +
+                       " sample points of set " + std::to_string(set + 1) +
+                       " lie outside the mesh's footprint");
     }
-    const std::string set_name = "set " + std::to_string(set + 1) + "/" + std::to_string(options.sets);
+    const std::string set_name =
+        "set " + std::to_string(set + 1) + "/" + std::to_string(options.sets);
     stage(set_name + ": geodesics on T");
     auto t0 = std::chrono::steady_clock::now();
     const std::vector<double> dt = pairwise_distances(graph_t, on_t);

@@ -1,4 +1,4 @@
-// The distance-preserving error of a simplified TIN (Ben-Moshe et al., sections 2 and 5.3),
+// The distance-preserving error of a simplified TIN (the DPTS paper, sections 2 and 5.3),
 // with geodesics on the Steiner graph computed by parallel Dijkstra queries (oneTBB).
 #pragma once
 
@@ -18,22 +18,22 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
                                        const std::vector<core::SurfacePoint>& points);
 
 struct EvalOptions {
-  int points = 100;               // K points per set
-  int sets = 3;                   // independent sets
+  int points = 100;  // K points per set
+  int sets = 3;      // independent sets
   std::uint64_t seed = 1;
-  double delta_m = 0;             // Steiner spacing; 0: kDefaultDeltaFactor x mean edge of T
-  double snap_m = 0;              // points outside T' within this distance are snapped onto it
+  double delta_m = 0;  // Steiner spacing; 0: kDefaultDeltaFactor x mean edge of T
+  double snap_m = 0;   // points outside T' within this distance are snapped onto it
 };
 
 // Default Steiner spacing as a fraction of the mean 3D edge length of the original TIN.
 inline constexpr double kDefaultDeltaFactor = 0.25;
 
 struct EvalResult {
-  double distance_error = 0;          // mean of the set errors
-  std::vector<double> set_errors;     // per set: mean |GD_T - GD_T'| / GD_T over all pairs
+  double distance_error = 0;       // mean of the set errors
+  std::vector<double> set_errors;  // per set: mean |GD_T - GD_T'| / GD_T over all pairs
   double delta_m = 0;
   std::size_t original_nodes = 0, simplified_nodes = 0;  // Steiner graph sizes
-  std::size_t snapped = 0;            // sample points snapped onto T'
+  std::size_t snapped = 0;                               // sample points snapped onto T'
   double original_s = 0, simplified_s = 0;  // wall time of the geodesics on T and on T'
 };
 

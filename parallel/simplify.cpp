@@ -22,7 +22,8 @@ std::size_t target_count(const KeepTarget& target, std::size_t input) {
   if (target.vertices) {
     n = *target.vertices;
   } else if (target.percent) {
-    n = static_cast<std::size_t>(std::llround(*target.percent / 100.0 * static_cast<double>(input)));
+    n = static_cast<std::size_t>(
+        std::llround(*target.percent / 100.0 * static_cast<double>(input)));
   }
   return std::min(input, std::max<std::size_t>(3, n));
 }

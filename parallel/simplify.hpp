@@ -11,7 +11,7 @@ namespace dpts::par {
 
 // How many vertices to keep: a percentage of the input's surface vertices (P2L) or a count.
 struct KeepTarget {
-  std::optional<double> percent;       // in (0, 100]
+  std::optional<double> percent;        // in (0, 100]
   std::optional<std::size_t> vertices;  // >= 3
 };
 

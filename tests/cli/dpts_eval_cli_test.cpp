@@ -1,6 +1,5 @@
 // dpts-eval as users run it: figures, JSON, exit codes.
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -28,7 +27,8 @@ struct Fixture {
 std::string last_line(const std::string& s) {
   const auto end = s.find_last_not_of('\n');
   const auto start = s.rfind('\n', end);
-  return s.substr(start == std::string::npos ? 0 : start + 1, end - (start == std::string::npos ? 0 : start + 1) + 1);
+  return s.substr(start == std::string::npos ? 0 : start + 1,
+                  end - (start == std::string::npos ? 0 : start + 1) + 1);
 }
 }  // namespace
 
@@ -41,14 +41,15 @@ TEST_CASE("dpts-eval reports every figure in one JSON line", "[cli][eval]") {
   const std::string js = last_line(r.out);
   CHECK(js.front() == '{');
   CHECK(js.back() == '}');
-  for (const char* key : {"\"distance_error\":", "\"distance_error_sets\":[", "\"vertical_rmse\":",
-                          "\"vertical_max\":", "\"mesh_vertices\":", "\"mesh_faces\":", "\"dem_vertices\":",
-                          "\"points\":20", "\"seconds\":", "\"faces_over_nodata\":0", "\"faces_not_ccw\":0",
-                          "\"coverage\":1,"}) {
+  for (const char* key : {"\"distance_error\":", "\"distance_error_sets\":[",
+                          "\"vertical_rmse\":", "\"vertical_max\":", "\"mesh_vertices\":",
+                          "\"mesh_faces\":", "\"dem_vertices\":", "\"points\":20", "\"seconds\":",
+                          "\"faces_over_nodata\":0", "\"faces_not_ccw\":0", "\"coverage\":1,"}) {
     INFO(key);
     CHECK(js.find(key) != std::string::npos);
   }
-  CHECK(r.out.find("validity         0 faces not counter-clockwise, 0 bad edges, 0 faces over no-data") !=
+  CHECK(r.out.find(
+            "validity         0 faces not counter-clockwise, 0 bad edges, 0 faces over no-data") !=
         std::string::npos);
 }
 

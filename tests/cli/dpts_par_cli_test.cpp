@@ -1,9 +1,8 @@
 // dpts-par as users run it: exit codes, one-line messages, no output left on failure.
-#include <catch2/catch.hpp>
-
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
 
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -69,7 +68,8 @@ TEST_CASE("dpts-par writes a georeferenced binary PLY and nothing else", "[cli]"
 TEST_CASE("options ascii, vertices and quiet do what they say", "[cli]") {
   Fixture fx;
   const auto out = (fx.dir / "out.ply").string();
-  const auto r = test::run(kExe, {"--quiet", "--ascii", "--vertices", "50", "--algo", "pld", fx.dem, out});
+  const auto r =
+      test::run(kExe, {"--quiet", "--ascii", "--vertices", "50", "--algo", "pld", fx.dem, out});
   REQUIRE(r.exit_code == 0);
   CHECK(r.err.empty());
   CHECK(io::read_ply_file(out).vertex_count() == 50);
@@ -106,7 +106,8 @@ TEST_CASE("bad usage exits 2 with a one-line message naming the flag, creating n
       {{"--keep", "0%", fx.dem, out}, "--keep 0%: expected a percentage with 0 < P <= 100"},
       {{"--keep", "150%", fx.dem, out}, "--keep 150%: expected a percentage with 0 < P <= 100"},
       {{"--vertices", "2", fx.dem, out}, "--vertices 2: expected an integer >= 3"},
-      {{"--keep", "10%", "--vertices", "50", fx.dem, out}, "--keep and --vertices: give one, not both"},
+      {{"--keep", "10%", "--vertices", "50", fx.dem, out},
+       "--keep and --vertices: give one, not both"},
       {{"--algo", "qslim", fx.dem, out}, "--algo qslim: expected vp or pld"},
       {{"--threads", "0", fx.dem, out}, "--threads 0: expected an integer >= 1"},
       {{"--bogus", fx.dem, out}, "--bogus: unknown option"},

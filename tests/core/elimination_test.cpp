@@ -1,12 +1,12 @@
 // Vertex elimination on hand-made DEMs: counts, footprint, Delaunay validity, determinism.
-#include <catch2/catch.hpp>
+#include "core/elimination.hpp"
 
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
 #include <map>
 
-#include "core/elimination.hpp"
 #include "core/footprint.hpp"
 #include "core/mesh_check.hpp"
 #include "parallel/simplify.hpp"
@@ -22,7 +22,7 @@ const double kNaN = std::numeric_limits<double>::quiet_NaN();
 // concave outline, a hole, and straight outline runs to simplify.
 core::HeightGrid hills(int w = 40, int h = 32) {
   return test::make_grid(w, h, [w, h](int c, int r) {
-    if (std::hypot(c - 12.0, r - 14.0) < 4.0) return kNaN;           // void
+    if (std::hypot(c - 12.0, r - 14.0) < 4.0) return kNaN;            // void
     if (c >= w - 6 && r >= h / 2 - 2 && r <= h / 2 + 2) return kNaN;  // notch
     if (c + r < 3) return kNaN;                                       // cut corner
     return 100.0 + 20.0 * std::sin(c * 0.3) * std::cos(r * 0.25) + 0.5 * c;
@@ -39,7 +39,8 @@ core::Tin simplify(const core::HeightGrid& g, core::Importance kind, std::size_t
 }
 
 // Frame positions of a TIN's vertices.
-std::vector<double> frame_xy(const core::HeightGrid& g, const core::GridFrame& f, const core::Tin& tin) {
+std::vector<double> frame_xy(const core::HeightGrid& g, const core::GridFrame& f,
+                             const core::Tin& tin) {
   std::vector<double> xy;
   for (std::uint32_t cell : tin.cells) {
     const int c = static_cast<int>(cell % g.width), r = static_cast<int>(cell / g.width);
@@ -51,7 +52,8 @@ std::vector<double> frame_xy(const core::HeightGrid& g, const core::GridFrame& f
 
 // Number of interior edges whose opposite vertex lies strictly inside the circumcircle.
 std::size_t non_delaunay_edges(const std::vector<double>& xy, const core::Tin& tin) {
-  std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> apex_of;  // directed edge -> apex
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t>
+      apex_of;  // directed edge -> apex
   for (const auto& f : tin.faces) {
     for (int i = 0; i < 3; ++i) apex_of[{f[i], f[(i + 1) % 3]}] = f[(i + 2) % 3];
   }
@@ -65,7 +67,8 @@ std::size_t non_delaunay_edges(const std::vector<double>& xy, const core::Tin& t
     const auto [cx, cy] = P(apex);
     const auto [dx, dy] = P(twin->second);
     // In-circle determinant of d against ccw triangle (a, b, c).
-    const double adx = ax - dx, ady = ay - dy, bdx = bx - dx, bdy = by - dy, cdx = cx - dx, cdy = cy - dy;
+    const double adx = ax - dx, ady = ay - dy, bdx = bx - dx, bdy = by - dy, cdx = cx - dx,
+                 cdy = cy - dy;
     const double det = (adx * adx + ady * ady) * (bdx * cdy - bdy * cdx) -
                        (bdx * bdx + bdy * bdy) * (adx * cdy - ady * cdx) +
                        (cdx * cdx + cdy * cdy) * (adx * bdy - ady * bdx);
@@ -141,7 +144,8 @@ TEST_CASE("corners and bends of the outline are never removed", "[core][simplify
   CHECK(tin.cells.size() > 3);
   check_tin(g, tin);
   // The DEM's corners that hold data are kept.
-  for (std::uint32_t corner : {std::uint32_t(23), std::uint32_t(19 * 24), std::uint32_t(19 * 24 + 23)}) {
+  for (std::uint32_t corner :
+       {std::uint32_t(23), std::uint32_t(19 * 24), std::uint32_t(19 * 24 + 23)}) {
     CHECK(std::binary_search(tin.cells.begin(), tin.cells.end(), corner));
   }
 }
@@ -154,7 +158,8 @@ TEST_CASE("void holes stay open at every level of simplification", "[core][simpl
   });
   const std::size_t input = core::surface_cells(g).size();
   for (double share : {0.5, 0.2}) {
-    const core::Tin tin = simplify(g, core::Importance::vp, static_cast<std::size_t>(share * input));
+    const core::Tin tin =
+        simplify(g, core::Importance::vp, static_cast<std::size_t>(share * input));
     check_tin(g, tin);
   }
 }
@@ -192,13 +197,50 @@ TEST_CASE("the result does not depend on how initial importance is split", "[cor
 
 TEST_CASE("a DEM without three neighbouring valid cells is refused", "[core][simplify]") {
   const auto g = test::make_grid(4, 4, [](int c, int r) { return (c + r) % 2 == 0 ? 1.0 : kNaN; });
-  CHECK_THROWS_AS(core::Eliminator(g, core::GridFrame{}, core::EliminationOptions{}), std::invalid_argument);
+  CHECK_THROWS_AS(core::Eliminator(g, core::GridFrame{}, core::EliminationOptions{}),
+                  std::invalid_argument);
 }
 
 TEST_CASE("VP keeps a spike and drops flat ground first", "[core][simplify][vp]") {
   // Flat 15 x 15 with one spike in the middle: at 10 vertices the spike must survive.
-  const auto g = test::make_grid(15, 15, [](int c, int r) { return c == 7 && r == 7 ? 50.0 : 0.0; });
+  const auto g =
+      test::make_grid(15, 15, [](int c, int r) { return c == 7 && r == 7 ? 50.0 : 0.0; });
   const core::Tin tin = simplify(g, core::Importance::vp, 10);
   CHECK(std::binary_search(tin.cells.begin(), tin.cells.end(), std::uint32_t(7 * 15 + 7)));
+  check_tin(g, tin);
+}
+
+TEST_CASE("an outline chord the caller refuses keeps its outline vertices", "[core][simplify]") {
+  // A plane would simplify to its 4 corners; refusing every chord longer than 3 cells keeps
+  // an outline vertex at least every 3 cells.
+  const auto g = test::make_grid(13, 10, [](int c, int r) { return 2.0 * c + r; });
+  core::EliminationOptions opt;
+  opt.outline_chord_ok = [&](std::uint32_t a, std::uint32_t b) {
+    const long dc = std::labs(static_cast<long>(a % 13) - static_cast<long>(b % 13));
+    const long dr = std::labs(static_cast<long>(a / 13) - static_cast<long>(b / 13));
+    return std::max(dc, dr) <= 3;
+  };
+  par::KeepTarget target;
+  target.vertices = 4;
+  const core::Tin tin = par::simplify_dem(g, core::GridFrame{}, opt, target, nullptr);
+  // Along each side, kept vertices are at most 3 cells apart (at least 14 on the outline, the
+  // optimum; greedy order may keep a few more), and fewer than all 38 outline cells remain.
+  std::vector<std::vector<int>> sides(4);  // positions along row 0, row 9, col 0, col 12
+  for (std::uint32_t cell : tin.cells) {
+    const int c = static_cast<int>(cell % 13), r = static_cast<int>(cell / 13);
+    if (r == 0) sides[0].push_back(c);
+    if (r == 9) sides[1].push_back(c);
+    if (c == 0) sides[2].push_back(r);
+    if (c == 12) sides[3].push_back(r);
+  }
+  std::size_t on_outline = 0;
+  for (auto& side : sides) {
+    std::sort(side.begin(), side.end());
+    for (std::size_t i = 1; i < side.size(); ++i) CHECK(side[i] - side[i - 1] <= 3);
+    on_outline += side.size();
+  }
+  CHECK(on_outline - 4 >= 14);  // corners counted twice
+  CHECK(on_outline - 4 < 38);
+  CHECK(tin.cells.size() == on_outline - 4);  // the plane's interior is all gone
   check_tin(g, tin);
 }

@@ -1,15 +1,15 @@
 // Tests of the valid footprint: surface vertices, exact point-in-footprint, area.
-#include <catch2/catch.hpp>
+#include "core/footprint.hpp"
 
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
 
-#include "core/footprint.hpp"
 #include "test_support.hpp"
 
-using dpts::core::FootprintIndex;
 using dpts::core::footprint_area_cells;
 using dpts::core::footprint_contains_third;
+using dpts::core::FootprintIndex;
 using dpts::core::surface_cells;
 
 namespace {
@@ -26,7 +26,8 @@ TEST_CASE("a full grid is all surface and its footprint is the cell-centre recta
 TEST_CASE("a no-data corner of a square leaves the triangle of the other three",
           "[core][footprint]") {
   // 2 x 2 grid with (1,1) missing: the footprint is the triangle (0,0) (1,0) (0,1).
-  const auto g = dpts::test::make_grid(2, 2, [](int c, int r) { return c == 1 && r == 1 ? kNaN : 0.0; });
+  const auto g =
+      dpts::test::make_grid(2, 2, [](int c, int r) { return c == 1 && r == 1 ? kNaN : 0.0; });
   CHECK(surface_cells(g).size() == 3);
   CHECK(footprint_area_cells(g) == 0.5);
   // Centroid of the valid triangle (sums of corners 0+1+0, 0+0+1) is inside; the centroid

@@ -1,10 +1,9 @@
 // VP and PLD importance on hand-made stars, against hand-computed values.
-#include <catch2/catch.hpp>
+#include "core/importance.hpp"
 
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <vector>
-
-#include "core/importance.hpp"
 
 using dpts::core::LinkTriangle;
 using dpts::core::Point3;
@@ -52,7 +51,8 @@ TEST_CASE("VP integrates |difference| where the surfaces cross", "[core][importa
   const Star star{{0, 0, 0}, link.data(), link.size(), true};
   const double exact = dpts::core::vp_volume_exact(star, kSplit02);
   // An independent computation: a dense Monte Carlo estimate.
-  CHECK(dpts::core::vp_volume_monte_carlo(star, kSplit02, 400000, 3) == Approx(exact).epsilon(0.02));
+  CHECK(dpts::core::vp_volume_monte_carlo(star, kSplit02, 400000, 3) ==
+        Approx(exact).epsilon(0.02));
   CHECK(exact == Approx(2.0 / 3.0).epsilon(1e-12));
 }
 
@@ -89,5 +89,6 @@ TEST_CASE("PLD goes round a link vertex that pokes towards the apex", "[core][im
   const double ratio02 = std::sqrt(2.0) / std::min(bent, 2.0);
   // Pair (1,3): ED = sqrt(1.1^2 * 2), via the apex (180 degrees both ways) = 0.1*sqrt2 + sqrt2.
   const double ratio13 = std::sqrt(2 * 1.1 * 1.1) / (0.1 * std::sqrt(2.0) + std::sqrt(2.0));
-  CHECK(dpts::core::pld_importance(star) == Approx(1.0 - std::min(ratio02, ratio13)).epsilon(1e-12));
+  CHECK(dpts::core::pld_importance(star) ==
+        Approx(1.0 - std::min(ratio02, ratio13)).epsilon(1e-12));
 }

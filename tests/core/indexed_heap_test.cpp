@@ -1,13 +1,14 @@
 // The indexed heap pops in (key, id) order whatever the updates.
-#include <catch2/catch.hpp>
-
-#include <algorithm>
-#include <random>
-#include <vector>
-
 #include "core/indexed_heap.hpp"
 
-TEST_CASE("IndexedMinHeap pops by key, ties by id, after updates and erasures", "[core][heap]") {
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <random>
+#include <tuple>
+#include <vector>
+
+TEST_CASE("IndexedMinHeap pops by key, ties by scrambled id, after updates and erasures",
+          "[core][heap]") {
   const std::uint32_t n = 500;
   dpts::core::IndexedMinHeap heap(n);
   std::mt19937 rng(5);
@@ -31,15 +32,16 @@ TEST_CASE("IndexedMinHeap pops by key, ties by id, after updates and erasures", 
       present[id] = true;
     }
   }
-  std::vector<std::pair<double, std::uint32_t>> expected;
+  using Heap = dpts::core::IndexedMinHeap;
+  std::vector<std::tuple<double, std::uint32_t, std::uint32_t>> expected;  // key, scramble, id
   for (std::uint32_t i = 0; i < n; ++i) {
-    if (present[i]) expected.emplace_back(key[i], i);
+    if (present[i]) expected.emplace_back(key[i], Heap::scramble(i), i);
   }
   std::sort(expected.begin(), expected.end());
   REQUIRE(heap.size() == expected.size());
   for (const auto& e : expected) {
-    REQUIRE(heap.top_key() == e.first);
-    REQUIRE(heap.pop() == e.second);
+    REQUIRE(heap.top_key() == std::get<0>(e));
+    REQUIRE(heap.pop() == std::get<2>(e));
   }
   CHECK(heap.empty());
 }

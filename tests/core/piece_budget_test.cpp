@@ -1,9 +1,8 @@
 // Per-piece budgets of PLD'/VP': the paper's formula, clamping, exact totals.
-#include <catch2/catch.hpp>
-
-#include <numeric>
-
 #include "core/piece_budget.hpp"
+
+#include <catch2/catch.hpp>
+#include <numeric>
 
 using dpts::core::piece_budgets;
 

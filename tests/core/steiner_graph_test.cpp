@@ -1,9 +1,9 @@
 // Steiner-graph geodesics: structure, planar limit, never below the exact geodesic.
-#include <catch2/catch.hpp>
+#include "core/steiner_graph.hpp"
 
+#include <catch2/catch.hpp>
 #include <cmath>
 
-#include "core/steiner_graph.hpp"
 #include "core/surface_sampling.hpp"
 #include "support/exact_geodesic.hpp"
 #include "test_support.hpp"
@@ -56,8 +56,9 @@ TEST_CASE("on a plane, Steiner distances approach the Euclidean distance as delt
       std::vector<core::SurfacePoint> targets(pts.begin() + i + 1, pts.end());
       q.distances(pts[i], targets, d);
       for (std::size_t j = 0; j < targets.size(); ++j) {
-        const double e = std::sqrt(std::pow(pts[i].x - targets[j].x, 2) + std::pow(pts[i].y - targets[j].y, 2) +
-                                   std::pow(pts[i].z - targets[j].z, 2));
+        const double e =
+            std::sqrt(std::pow(pts[i].x - targets[j].x, 2) + std::pow(pts[i].y - targets[j].y, 2) +
+                      std::pow(pts[i].z - targets[j].z, 2));
         CHECK(d[j] >= e * (1 - 1e-12));  // never shorter than the straight line
         sum += (d[j] - e) / e;
         ++n;

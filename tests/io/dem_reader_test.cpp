@@ -1,15 +1,15 @@
 // Reading DEMs with GDAL: no-data, CRS handling, errors.
-#include <catch2/catch.hpp>
+#include "io/dem_reader.hpp"
 
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
 
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <fstream>
 #include <limits>
 
 #include "core/errors.hpp"
-#include "io/dem_reader.hpp"
 #include "test_support.hpp"
 
 using namespace dpts;
@@ -30,7 +30,8 @@ std::string epsg_wkt(int code) {
 TEST_CASE("a projected DEM is read with its no-data and exact metric frame", "[io][dem]") {
   GDALAllRegister();
   test::TempDir dir;
-  const auto g = test::make_grid(6, 5, [](int c, int r) { return c == 2 && r == 3 ? kNaN : c * 10.0 + r; });
+  const auto g =
+      test::make_grid(6, 5, [](int c, int r) { return c == 2 && r == 3 ? kNaN : c * 10.0 + r; });
   test::write_geotiff(dir / "dem.tif", g, {500000, 30, 0, 4100000, 0, -30}, epsg_wkt(32611));
   const io::Dem dem = io::read_dem((dir / "dem.tif").string(), {}, nullptr);
   CHECK(dem.grid.width == 6);

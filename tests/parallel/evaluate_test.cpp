@@ -1,13 +1,13 @@
 // The distance-preserving error: zero for identical meshes, same for any thread count.
-#include <catch2/catch.hpp>
+#include "parallel/evaluate.hpp"
 
 #include <tbb/global_control.h>
 
+#include <catch2/catch.hpp>
 #include <cmath>
 
 #include "core/errors.hpp"
 #include "core/surface_sampling.hpp"
-#include "parallel/evaluate.hpp"
 #include "parallel/simplify.hpp"
 #include "test_support.hpp"
 
@@ -26,7 +26,8 @@ core::HeightGrid hills() {
 core::TriMesh to_mesh(const core::HeightGrid& g, const std::vector<std::uint32_t>& cells,
                       const std::vector<std::array<std::uint32_t, 3>>& faces) {
   core::TriMesh m;
-  for (auto c : cells) m.xyz.insert(m.xyz.end(), {10.0 * (c % g.width), -10.0 * (c / g.width), g.z[c]});
+  for (auto c : cells)
+    m.xyz.insert(m.xyz.end(), {10.0 * (c % g.width), -10.0 * (c / g.width), g.z[c]});
   m.faces = faces;
   core::fix_orientation(m);
   return m;
@@ -74,7 +75,8 @@ TEST_CASE("the distance error grows as fewer vertices are kept", "[parallel][eva
   CHECK(e10 > e50);
 }
 
-TEST_CASE("evaluation figures are identical for 1 and 2 threads", "[parallel][evaluate][determinism]") {
+TEST_CASE("evaluation figures are identical for 1 and 2 threads",
+          "[parallel][evaluate][determinism]") {
   const auto g = hills();
   const auto t = hills_grid_mesh(g);
   const auto s = simplified(g, 20.0);
@@ -82,7 +84,8 @@ TEST_CASE("evaluation figures are identical for 1 and 2 threads", "[parallel][ev
   opt.points = 30;
   std::vector<double> errors[2];
   for (int threads = 1; threads <= 2; ++threads) {
-    tbb::global_control c(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism,
+                          static_cast<std::size_t>(threads));
     errors[threads - 1] = par::evaluate_distances(t, s, opt).set_errors;
   }
   CHECK(errors[0] == errors[1]);
@@ -95,10 +98,12 @@ TEST_CASE("sample points outside the mesh are an error with their count", "[para
   core::TriMesh half = t;
   half.faces.clear();
   for (const auto& f : t.faces) {
-    if (t.xyz[3 * f[0]] < 170 && t.xyz[3 * f[1]] < 170 && t.xyz[3 * f[2]] < 170) half.faces.push_back(f);
+    if (t.xyz[3 * f[0]] < 170 && t.xyz[3 * f[1]] < 170 && t.xyz[3 * f[2]] < 170)
+      half.faces.push_back(f);
   }
   par::EvalOptions opt;
   opt.points = 40;
-  CHECK_THROWS_WITH(par::evaluate_distances(t, half, opt),
-                    Catch::Matches(".*[0-9]+ of 40 sample points of set 1 lie outside the mesh's footprint"));
+  CHECK_THROWS_WITH(
+      par::evaluate_distances(t, half, opt),
+      Catch::Matches(".*[0-9]+ of 40 sample points of set 1 lie outside the mesh's footprint"));
 }

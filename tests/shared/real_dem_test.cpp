@@ -1,8 +1,7 @@
 // The engine on real DEMs from ../shared/data (built only when that folder exists).
-#include <catch2/catch.hpp>
-
 #include <gdal_priv.h>
 
+#include <catch2/catch.hpp>
 #include <cmath>
 
 #include "core/footprint.hpp"
@@ -72,8 +71,8 @@ TEST_CASE("Kilauea's salt-and-pepper sea voids stay open", "[shared][simplify][.
   CHECK(mc.area == Approx(core::footprint_area_cells(r.dem.grid) * 900.0).epsilon(1e-9));
 }
 
-#include "support/exact_geodesic.hpp"
 #include "parallel/evaluate.hpp"
+#include "support/exact_geodesic.hpp"
 
 TEST_CASE("Steiner distances on real 50 x 50 crops: within 1 % of exact on average, never below",
           "[shared][geodesic][exact]") {
@@ -81,7 +80,8 @@ TEST_CASE("Steiner distances on real 50 x 50 crops: within 1 % of exact on avera
     const char* file;
     int c0, r0;
   };
-  for (const Crop c : {Crop{"st_helens_crater.tif", 39, 39}, Crop{"san_gabriel_bigtujunga_utm11.tif", 600, 300}}) {
+  for (const Crop c :
+       {Crop{"st_helens_crater.tif", 39, 39}, Crop{"san_gabriel_bigtujunga_utm11.tif", 600, 300}}) {
     INFO(c.file);
     const auto mesh = test::dem_crop(test::shared_data(c.file), c.c0, c.r0, 50);
     const double delta = par::kDefaultDeltaFactor * core::mean_edge_length(mesh);

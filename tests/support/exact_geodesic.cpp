@@ -31,7 +31,8 @@ std::vector<double> exact_geodesics(const core::TriMesh& tin, const core::Surfac
   Mesh mesh;
   std::vector<Mesh::Vertex_index> vs;
   for (std::size_t v = 0; v < tin.vertex_count(); ++v) {
-    vs.push_back(mesh.add_vertex(K::Point_3(tin.xyz[3 * v], tin.xyz[3 * v + 1], tin.xyz[3 * v + 2])));
+    vs.push_back(
+        mesh.add_vertex(K::Point_3(tin.xyz[3 * v], tin.xyz[3 * v + 1], tin.xyz[3 * v + 2])));
   }
   for (const auto& f : tin.faces) mesh.add_face(vs[f[0]], vs[f[1]], vs[f[2]]);
   ShortestPath sp(mesh);
