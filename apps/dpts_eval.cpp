@@ -165,14 +165,9 @@ int run(const Options& o) {
   core::TriMesh s{std::move(ply.xyz), std::move(ply.faces)};
 
   // Validity of T' over the DEM.
-  std::vector<double> s_xy(2 * s.vertex_count());
-  for (std::size_t v = 0; v < s.vertex_count(); ++v)
-    s_xy[2 * v] = s.xyz[3 * v], s_xy[2 * v + 1] = s.xyz[3 * v + 1];
+  const std::vector<double> s_xy = core::xy_of(s.xyz);
   const core::MeshCheck mc = core::check_mesh(s_xy, s.faces);
-  std::vector<double> t_xy(2 * t.vertex_count());
-  for (std::size_t v = 0; v < t.vertex_count(); ++v)
-    t_xy[2 * v] = t.xyz[3 * v], t_xy[2 * v + 1] = t.xyz[3 * v + 1];
-  const double footprint_area = core::check_mesh(t_xy, t.faces).area;
+  const double footprint_area = core::mesh_area(core::xy_of(t.xyz), t.faces);
   const double tol = dem.to_output ? 0.01 : 1e-6;  // cells; reprojection rounding
   const std::size_t over_nodata =
       core::faces_over_nodata(dem.grid, dem.grid_xy(s_xy), s.faces, tol);

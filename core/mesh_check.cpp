@@ -7,6 +7,28 @@
 
 namespace dpts::core {
 
+namespace {
+double twice_area(const std::vector<double>& xy, const std::array<std::uint32_t, 3>& f) {
+  const double ax = xy[2 * f[0]], ay = xy[2 * f[0] + 1];
+  return (xy[2 * f[1]] - ax) * (xy[2 * f[2] + 1] - ay) -
+         (xy[2 * f[1] + 1] - ay) * (xy[2 * f[2]] - ax);
+}
+}  // namespace
+
+double mesh_area(const std::vector<double>& xy,
+                 const std::vector<std::array<std::uint32_t, 3>>& faces) {
+  double area = 0.0;
+  for (const auto& f : faces) area += 0.5 * twice_area(xy, f);
+  return area;
+}
+
+std::vector<double> xy_of(const std::vector<double>& xyz) {
+  std::vector<double> xy(2 * (xyz.size() / 3));
+  for (std::size_t v = 0; v < xyz.size() / 3; ++v)
+    xy[2 * v] = xyz[3 * v], xy[2 * v + 1] = xyz[3 * v + 1];
+  return xy;
+}
+
 MeshCheck check_mesh(const std::vector<double>& xy,
                      const std::vector<std::array<std::uint32_t, 3>>& faces) {
   MeshCheck result;
@@ -14,10 +36,7 @@ MeshCheck check_mesh(const std::vector<double>& xy,
   std::vector<std::pair<std::uint64_t, int>> edges;  // (min,max) key, +1 forward / -1 backward
   edges.reserve(faces.size() * 3);
   for (const auto& f : faces) {
-    const double ax = xy[2 * f[0]], ay = xy[2 * f[0] + 1];
-    const double bx = xy[2 * f[1]], by = xy[2 * f[1] + 1];
-    const double cx = xy[2 * f[2]], cy = xy[2 * f[2] + 1];
-    const double area2 = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax);
+    const double area2 = twice_area(xy, f);
     if (!(area2 > 0)) ++result.clockwise_or_flat;
     result.area += 0.5 * area2;
     for (int i = 0; i < 3; ++i) {

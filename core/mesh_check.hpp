@@ -24,6 +24,13 @@ struct MeshCheck {
 MeshCheck check_mesh(const std::vector<double>& xy,  // x0, y0, x1, y1, ...
                      const std::vector<std::array<std::uint32_t, 3>>& faces);
 
+// Sum of signed face areas in x, y (positive for counter-clockwise faces).
+double mesh_area(const std::vector<double>& xy,
+                 const std::vector<std::array<std::uint32_t, 3>>& faces);
+
+// x, y of each vertex (x0, y0, x1, y1, ...) from x, y, z triples.
+std::vector<double> xy_of(const std::vector<double>& xyz);
+
 // Number of faces that contain (closed, in grid space) the centre of a no-data cell or reach
 // outside the grid. grid_xy holds each vertex's grid position (col, row) as doubles;
 // `tolerance` (in cells) absorbs rounding from coordinate transformations.

@@ -27,14 +27,14 @@ SurfacePoint lift(const TriMesh& m, std::uint32_t f, double x, double y) {
   return {x, y, la * a[2] + lb * b[2] + lc * c[2], f};
 }
 
-// Squared distance in x, y from p to segment a-b.
-double segment_dist2(const double* p, const double* a, const double* b) {
+// The point of segment a-b nearest to p in x, y, into q; returns its squared distance.
+double closest_on_segment(const double* p, const double* a, const double* b, double* q) {
   const double dx = b[0] - a[0], dy = b[1] - a[1];
   const double len2 = dx * dx + dy * dy;
   double t = len2 > 0 ? ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2 : 0.0;
   t = std::clamp(t, 0.0, 1.0);
-  const double ex = a[0] + t * dx - p[0], ey = a[1] + t * dy - p[1];
-  return ex * ex + ey * ey;
+  q[0] = a[0] + t * dx, q[1] = a[1] + t * dy;
+  return (q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]);
 }
 
 }  // namespace
@@ -160,8 +160,10 @@ std::optional<PointLocator::Hit> PointLocator::locate(double x, double y, double
           return Hit{lift(mesh_, f, x, y), false};
         }
         if (snap > 0) {
+          double q[2];
           const double d2 =
-              std::min({segment_dist2(p, a, bb), segment_dist2(p, bb, c), segment_dist2(p, c, a)});
+              std::min({closest_on_segment(p, a, bb, q), closest_on_segment(p, bb, c, q),
+                        closest_on_segment(p, c, a, q)});
           if (d2 <= best_d2 && (!nearest || d2 < best_d2 || f < *nearest))
             best_d2 = d2, nearest = f;
         }
@@ -171,20 +173,14 @@ std::optional<PointLocator::Hit> PointLocator::locate(double x, double y, double
   if (!nearest) return std::nullopt;
   // Snap onto the nearest face: its closest point, then lift.
   const auto& F = mesh_.faces[*nearest];
-  const double* q[3] = {&mesh_.xyz[3 * F[0]], &mesh_.xyz[3 * F[1]], &mesh_.xyz[3 * F[2]]};
-  double sx = x, sy = y, sd2 = std::numeric_limits<double>::infinity();
+  const double* corner[3] = {&mesh_.xyz[3 * F[0]], &mesh_.xyz[3 * F[1]], &mesh_.xyz[3 * F[2]]};
+  double snapped[2] = {x, y}, sd2 = std::numeric_limits<double>::infinity();
   for (int e = 0; e < 3; ++e) {
-    const double* a = q[e];
-    const double* b = q[(e + 1) % 3];
-    const double dx = b[0] - a[0], dy = b[1] - a[1];
-    const double len2 = dx * dx + dy * dy;
-    const double t =
-        len2 > 0 ? std::clamp(((x - a[0]) * dx + (y - a[1]) * dy) / len2, 0.0, 1.0) : 0.0;
-    const double px = a[0] + t * dx, py = a[1] + t * dy;
-    const double d2 = (px - x) * (px - x) + (py - y) * (py - y);
-    if (d2 < sd2) sd2 = d2, sx = px, sy = py;
+    double q[2];
+    const double d2 = closest_on_segment(p, corner[e], corner[(e + 1) % 3], q);
+    if (d2 < sd2) sd2 = d2, snapped[0] = q[0], snapped[1] = q[1];
   }
-  return Hit{lift(mesh_, *nearest, sx, sy), true};
+  return Hit{lift(mesh_, *nearest, snapped[0], snapped[1]), true};
 }
 
 }  // namespace dpts::core
