@@ -18,8 +18,14 @@ std::string par_help() {
 Simplifies a DEM (band 1 of any raster GDAL reads) into a TIN that preserves surface
 (geodesic) distances, by Delaunay vertex elimination, and writes it as PLY.
 
-  --algo vp|pld        importance: vp = volume between the surfaces before and after a
-                       removal (default); pld = preserve local distances
+  --algo ALGO          vp: importance = volume between the surfaces before and after a
+                       removal (default); pld: preserve local distances; vp-meta, pld-meta:
+                       the paper's VP' and PLD' (k-d pieces, per-piece budgets from the
+                       pieces' mean ED/GD), run out of core: pieces are read, simplified
+                       and freed concurrently, and only the kept vertices are merged
+  --levels C           vp-meta/pld-meta: at least 2^C pieces (default 4)
+  --value-points L     vp-meta/pld-meta: random points per piece value (default 20)
+  --verbose            vp-meta/pld-meta: print every piece's value and budget, and times
   --keep P%            keep P percent of the input vertices, 0 < P <= 100 (default 10%)
   --vertices N         keep N vertices instead (N >= 3)
   --vp-volume exact|mc VP volume: exact integral over the hole (default) or the paper's
@@ -29,8 +35,9 @@ Simplifies a DEM (band 1 of any raster GDAL reads) into a TIN that preserves sur
   --t-srs CRS          output CRS (projected); default: the DEM's own CRS if projected,
                        the UTM zone of its centre if geographic
   --threads N          worker threads (default: all cores)
-  --tile-mb M          memory budget of one tile in MB (default 256; accepted now, the
-                       tiled out-of-core engine is not built yet: the DEM is read whole)
+  --tile-mb M          vp-meta/pld-meta: memory budget of one piece in MB (default 256);
+                       peak memory is about threads x M plus the kept vertices. vp and pld
+                       read the whole DEM
   --ascii              write ASCII PLY (default: binary little-endian)
   --config KEY VALUE   set a GDAL configuration option
   --quiet              no progress or summary on stderr (warnings still show)
@@ -70,13 +77,24 @@ ParOptions parse_par(const std::vector<std::string>& args) {
       o.version = true;
     } else if (arg == "--algo") {
       const std::string v = need(arg);
-      if (v == "vp") {
+      o.meta = v == "vp-meta" || v == "pld-meta";
+      if (v == "vp" || v == "vp-meta") {
         o.elimination.importance = core::Importance::vp;
-      } else if (v == "pld") {
+      } else if (v == "pld" || v == "pld-meta") {
         o.elimination.importance = core::Importance::pld;
       } else {
-        throw UsageError("--algo " + v + ": expected vp or pld");
+        throw UsageError("--algo " + v + ": expected vp, pld, vp-meta or pld-meta");
       }
+      o.algo_text = v;
+    } else if (arg == "--levels") {
+      o.levels = parse_number<int>(arg, need(arg), 0, "an integer from 0 to 16");
+      if (o.levels > 16)
+        throw UsageError("--levels " + std::to_string(o.levels) +
+                         ": expected an integer from 0 to 16");
+    } else if (arg == "--value-points") {
+      o.value_points = parse_number<int>(arg, need(arg), 2, "an integer >= 2");
+    } else if (arg == "--verbose" || arg == "-v") {
+      o.verbose = true;
     } else if (arg == "--keep") {
       std::string v = need(arg);
       o.keep_text = v;

@@ -20,6 +20,11 @@ struct ParOptions {
   core::EliminationOptions elimination;
   par::KeepTarget keep;
   std::string keep_text = "10%";
+  std::string algo_text = "vp";
+  bool meta = false;  // --algo vp-meta | pld-meta: the piece engine (PLD'/VP')
+  int levels = 4;
+  int value_points = 20;
+  bool verbose = false;
   int threads = 0;  // 0: all cores
   int tile_mb = 256;
   std::string t_srs;

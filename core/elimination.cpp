@@ -22,6 +22,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 
@@ -82,11 +83,18 @@ struct Eliminator::Impl {
   std::vector<double> initial;             // importance from compute_importance()
   std::vector<std::uint32_t> evaluations;  // per-vertex counter, seeds Monte Carlo VP
   IndexedMinHeap heap;
+  bool heap_ready = false;
   Delaunay dt;
   std::size_t alive = 0;
 
+  double inv[2][2];  // frame (u, w) -> grid (col, row)
+
   Impl(const HeightGrid& g, const GridFrame& f, const EliminationOptions& o)
-      : grid(g), footprint(g), frame(f), options(o) {}
+      : grid(g), footprint(g), frame(f), options(o) {
+    const double det = f.m[0][0] * f.m[1][1] - f.m[0][1] * f.m[1][0];
+    inv[0][0] = f.m[1][1] / det, inv[0][1] = -f.m[0][1] / det;
+    inv[1][0] = -f.m[1][0] / det, inv[1][1] = f.m[0][0] / det;
+  }
 
   Point3 metric(VertexHandle v) const {
     const double s = frame.metres_per_unit;
@@ -131,6 +139,87 @@ struct Eliminator::Impl {
     return true;
   }
 
+  // Whether the chord poly.front() - poly.back() about to replace an outline vertex has a circle
+  // through its ends that is empty in this TIN and lies in options.chord_box (see there). The
+  // circles through a and b have centres m + t n (m the chord's middle, n its unit normal away
+  // from the inner apex r); a vertex q on the inner side is outside the circle iff t > t_q, one
+  // on the far side iff t < t_q. Take the t in the open empty range nearest 0 (the smallest
+  // circle), with a relative margin for rounding, and test the circle against the box in grid
+  // space.
+  bool witness_in_box(const Scratch& s, std::size_t first, const Point& pr) const {
+    const Point& pa = s.poly.front()->point();
+    const Point& pb = s.poly.back()->point();
+    const double mx = 0.5 * (pa.x() + pb.x()), my = 0.5 * (pa.y() + pb.y());
+    const double dx = pb.x() - pa.x(), dy = pb.y() - pa.y();
+    const double len = std::hypot(dx, dy);
+    double nx = -dy / len, ny = dx / len;
+    if ((pr.x() - mx) * nx + (pr.y() - my) * ny > 0) nx = -nx, ny = -ny;
+    const double quarter = 0.25 * len * len;
+    double lo = -std::numeric_limits<double>::infinity();
+    double hi = std::numeric_limits<double>::infinity();
+    auto bound = [&](const Point& q) {
+      const double qx = q.x() - mx, qy = q.y() - my;
+      const double side = qx * nx + qy * ny;
+      const double power = qx * qx + qy * qy - quarter;
+      if (side == 0) {
+        if (power < 0) lo = 1, hi = -1;  // on the chord itself: no circle
+        return;
+      }
+      const double t = power / (2 * side);
+      if (side < 0) {
+        lo = std::max(lo, t);
+      } else {
+        hi = std::min(hi, t);
+      }
+    };
+    bound(pr);
+    const std::size_t n = s.ring.size();
+    for (std::size_t j = (first + s.poly.size()) % n; j != first; j = (j + 1) % n) {
+      const VertexHandle q = s.ring[j];
+      if (q == s.poly.front() || q == s.poly.back() || dt.is_infinite(q)) continue;
+      bound(q->point());
+    }
+    const double tol = 1e-7 * len;
+    lo += tol, hi -= tol;
+    if (!(lo <= hi)) return false;
+    const double t = std::clamp(0.0, lo, hi);
+    const double radius = std::sqrt(quarter + t * t);
+    const double cx = mx + t * nx, cy = my + t * ny;
+    // Grid position of the centre, and the circle's extent in columns and rows.
+    const double col = inv[0][0] * cx + inv[0][1] * cy, row = inv[1][0] * cx + inv[1][1] * cy;
+    const double col_r = radius * std::hypot(inv[0][0], inv[0][1]);
+    const double row_r = radius * std::hypot(inv[1][0], inv[1][1]);
+    const auto& box = *options.chord_box;
+    const double margin = 1e-6;
+    return col - col_r >= box.col_lo + margin && col + col_r <= box.col_hi - margin &&
+           row - row_r >= box.row_lo + margin && row + row_r <= box.row_hi - margin;
+  }
+
+  // v's removal for the log: on the outline, the ends of the inside run of faces round it.
+  Removal removal(VertexHandle v) const {
+    Removal r;
+    r.cell = cells[v->info().id];
+    std::vector<VertexHandle> ring;
+    std::vector<char> inside;
+    auto fc = dt.incident_faces(v);
+    const auto done = fc;
+    do {
+      ring.push_back(fc->vertex(Delaunay::ccw(fc->index(v))));
+      inside.push_back(!dt.is_infinite(fc) && fc->info().inside == 1);
+    } while (++fc != done);
+    const std::size_t n = ring.size();
+    for (std::size_t j = 0; j < n; ++j) {
+      if (!inside[j] || inside[(j + n - 1) % n]) continue;
+      std::size_t k = j;
+      while (inside[k]) k = (k + 1) % n;
+      r.outline = true;
+      r.next = cells[ring[j]->info().id];
+      r.prev = cells[ring[k]->info().id];
+      break;
+    }
+    return r;
+  }
+
   // Importance of v, or kLocked when v must stay (a corner or bend of the outline, or an
   // outline vertex whose removal would change the footprint). With relabel_mark != 0, first
   // relabels the incident faces whose three corners carry that stamp (new faces of a hole).
@@ -150,6 +239,7 @@ struct Eliminator::Impl {
       s.inside.push_back(!dt.is_infinite(fc) && fc->info().inside == 1);
     } while (++fc != done);
     const std::size_t n = s.ring.size();
+    if (!options.pinned.empty() && options.pinned[cells[v->info().id]]) return kLocked;
     const std::size_t n_inside =
         static_cast<std::size_t>(std::count(s.inside.begin(), s.inside.end(), 1));
     if (n_inside == 0) return kLocked;
@@ -197,6 +287,7 @@ struct Eliminator::Impl {
           return kLocked;
         }
       }
+      if (options.chord_box && !witness_in_box(s, first, pr)) return kLocked;
     }
 
     s.pts.clear();
@@ -258,9 +349,10 @@ void Eliminator::compute_importance(std::size_t begin, std::size_t end) {
   }
 }
 
-void Eliminator::eliminate(std::size_t keep, const Progress& progress) {
+void Eliminator::eliminate(std::size_t keep, const Progress& progress, std::vector<Removal>* log) {
   Impl& m = *impl_;
-  {
+  if (!m.heap_ready) {
+    m.heap_ready = true;
     std::vector<std::uint32_t> ids;
     std::vector<double> keys;
     for (std::uint32_t id = 0; id < m.cells.size(); ++id) {
@@ -280,6 +372,7 @@ void Eliminator::eliminate(std::size_t keep, const Progress& progress) {
   while (m.alive > keep && !m.heap.empty()) {
     const std::uint32_t id = m.heap.pop();
     const VertexHandle v = m.handle[id];
+    if (log) log->push_back(m.removal(v));
     link.clear();
     auto vc = m.dt.incident_vertices(v);
     const auto done = vc;
@@ -329,6 +422,25 @@ Tin Eliminator::tin() const {
   }
   std::sort(tin.faces.begin(), tin.faces.end());
   return tin;
+}
+
+const std::vector<std::uint32_t>& Eliminator::cells() const { return impl_->cells; }
+bool Eliminator::alive(std::size_t id) const { return impl_->handle[id] != VertexHandle(); }
+
+std::vector<OutlineEdge> Eliminator::outline_edges() const {
+  const Impl& m = *impl_;
+  std::vector<OutlineEdge> out;
+  for (auto f = m.dt.finite_faces_begin(); f != m.dt.finite_faces_end(); ++f) {
+    if (f->info().inside != 1) continue;
+    for (int i = 0; i < 3; ++i) {
+      const FaceHandle g = f->neighbor(i);
+      if (!m.dt.is_infinite(g) && g->info().inside == 1) continue;
+      out.push_back({m.cells[f->vertex(Delaunay::ccw(i))->info().id],
+                     m.cells[f->vertex(Delaunay::cw(i))->info().id]});
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 }  // namespace dpts::core

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string_view>
 #include <vector>
 
@@ -29,6 +30,29 @@ struct EliminationOptions {
   // affine map). For a reprojected DEM, a straight grid line bends in the output CRS, and the
   // caller limits how far the chord may stray from it. Called concurrently: must be thread-safe.
   std::function<bool(std::uint32_t cell_a, std::uint32_t cell_b)> outline_chord_ok;
+  // Cells that are never removed (indexed by cell; empty: none): the context round a piece of
+  // the meta method, and the piece's own outline cells next to its border.
+  std::vector<std::uint8_t> pinned;
+  // Where the vertices of this TIN are the only ones (grid units, cell centres at integers;
+  // +-infinity where the DEM ends). A piece's TIN is later merged with the vertices its
+  // neighbours keep beyond this box; an outline chord is accepted only if some circle through
+  // its ends that is empty in this TIN also lies inside the box, so that the chord stays a
+  // Delaunay edge of the merged TIN and the footprint stays exact. Null: no such limit.
+  struct Box {
+    double col_lo, col_hi, row_lo, row_hi;
+  };
+  std::optional<Box> chord_box;
+};
+
+// A directed outline edge of a TIN (cells), with the footprint on its left.
+using OutlineEdge = std::array<std::uint32_t, 2>;
+
+// One removal, as logged by Eliminator::eliminate(): the cell, and for an outline vertex the
+// outline edges it joined, prev -> cell -> next, which the chord prev -> next replaced.
+struct Removal {
+  std::uint32_t cell = 0;
+  bool outline = false;
+  std::uint32_t prev = 0, next = 0;
 };
 
 // A TIN over a DEM: vertices are cells (row-major indices, ascending), faces index into
@@ -68,12 +92,21 @@ class Eliminator {
   void compute_importance(std::size_t begin, std::size_t end);
 
   // Removes vertices, least important first, until `keep` remain or none can be removed
-  // without changing the footprint. Requires compute_importance() on all vertices first.
+  // without changing the footprint. Requires compute_importance() on all vertices first. May
+  // be called again with a smaller keep to go on; with `log`, appends each removal to it.
   // Throws dpts::Cancelled when progress returns false.
-  void eliminate(std::size_t keep, const Progress& progress);
+  void eliminate(std::size_t keep, const Progress& progress, std::vector<Removal>* log = nullptr);
 
   // The current TIN: faces inside the footprint only.
   Tin tin() const;
+
+  // Surface cells (the vertex ids' cells, ascending) and whether each is still in the TIN.
+  const std::vector<std::uint32_t>& cells() const;
+  bool alive(std::size_t id) const;
+
+  // The edges of the current TIN between a face inside the footprint and one outside it (or
+  // the outside of the convex hull), directed with the inside face on the left.
+  std::vector<OutlineEdge> outline_edges() const;
 
  private:
   struct Impl;

@@ -7,10 +7,12 @@
 #include <ogr_spatialref.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <mutex>
 
 #include "core/errors.hpp"
 
@@ -59,11 +61,11 @@ void TransformDeleter::operator()(OGRCoordinateTransformation* t) const {
   OGRCoordinateTransformation::DestroyCT(t);
 }
 
-std::vector<double> Dem::output_xy(const std::vector<std::uint32_t>& cells) const {
+std::vector<double> DemInfo::output_xy(const std::vector<std::uint32_t>& cells) const {
   const double* gt = geotransform;
   std::vector<double> x(cells.size()), y(cells.size());
   for (std::size_t i = 0; i < cells.size(); ++i) {
-    const double c = cells[i] % grid.width + 0.5, r = cells[i] / grid.width + 0.5;
+    const double c = cells[i] % width + 0.5, r = cells[i] / width + 0.5;
     x[i] = gt[0] + c * gt[1] + r * gt[2];
     y[i] = gt[3] + c * gt[4] + r * gt[5];
   }
@@ -81,7 +83,7 @@ std::vector<double> Dem::output_xy(const std::vector<std::uint32_t>& cells) cons
   return xy;
 }
 
-std::vector<double> Dem::grid_xy(const std::vector<double>& output_xy) const {
+std::vector<double> DemInfo::grid_xy(const std::vector<double>& output_xy) const {
   const std::size_t n = output_xy.size() / 2;
   std::vector<double> x(n), y(n);
   for (std::size_t i = 0; i < n; ++i) x[i] = output_xy[2 * i], y[i] = output_xy[2 * i + 1];
@@ -106,54 +108,58 @@ std::vector<double> Dem::grid_xy(const std::vector<double>& output_xy) const {
   return grid;
 }
 
-std::function<bool(std::uint32_t, std::uint32_t)> Dem::outline_chord_test(
-    double tolerance_m) const {
+double DemInfo::outline_tolerance_m() const {
+  return 0.01 * frame.metres_per_unit * std::min(1.0, std::fabs(frame.m[1][1]));
+}
+
+std::function<bool(std::uint32_t, std::uint32_t)> DemInfo::outline_chord_test(
+    double tolerance_m, int col0, int row0, int window_width) const {
   if (!to_output) return nullptr;
-  // Outline cells: valid cells with a no-data or missing 8-neighbour. Their exact positions.
-  const core::HeightGrid& g = grid;
-  std::vector<std::uint32_t> outline;
-  for (int r = 0; r < g.height; ++r) {
-    for (int c = 0; c < g.width; ++c) {
-      if (!g.is_valid(c, r)) continue;
-      bool edge = false;
-      for (int dr = -1; dr <= 1 && !edge; ++dr) {
-        for (int dc = -1; dc <= 1 && !edge; ++dc) edge = !g.is_valid(c + dc, r + dr);
-      }
-      if (edge) outline.push_back(static_cast<std::uint32_t>(g.index(c, r)));
-    }
-  }
-  auto xy = std::make_shared<const std::vector<double>>(output_xy(outline));
-  auto cells = std::make_shared<const std::vector<std::uint32_t>>(std::move(outline));
+  // A transformation of our own (they are not thread-safe), shared by the copies of the test
+  // and used under a lock: the test runs for outline vertices only, a small share of the work.
+  struct Shared {
+    std::unique_ptr<OGRCoordinateTransformation, TransformDeleter> ct;
+    std::mutex lock;
+  };
+  auto shared = std::make_shared<Shared>();
+  shared->ct.reset(to_output->Clone());
+  if (!shared->ct) throw IoError(path + ": cannot copy the transformation to " + output_crs_name);
+  const double* gt = geotransform;
+  const std::array<double, 6> g{gt[0], gt[1], gt[2], gt[3], gt[4], gt[5]};
+  const long win_w = window_width > 0 ? window_width : width;
   const double unit_m = metres_per_output_unit;
-  const int width = g.width;
-  return [xy, cells, width, unit_m, tolerance_m](std::uint32_t a, std::uint32_t b) {
-    auto position = [&](std::uint32_t cell, double& x, double& y) {
-      const auto it = std::lower_bound(cells->begin(), cells->end(), cell);
-      if (it == cells->end() || *it != cell) return false;
-      const std::size_t i = static_cast<std::size_t>(it - cells->begin());
-      x = (*xy)[2 * i], y = (*xy)[2 * i + 1];
-      return true;
-    };
-    const long ca = static_cast<long>(a % width), ra = static_cast<long>(a / width);
-    const long cb = static_cast<long>(b % width), rb = static_cast<long>(b / width);
+  return [shared, g, win_w, col0, row0, unit_m, tolerance_m](std::uint32_t a, std::uint32_t b) {
+    const long ca = static_cast<long>(a % win_w), ra = static_cast<long>(a / win_w);
+    const long cb = static_cast<long>(b % win_w), rb = static_cast<long>(b / win_w);
     const long steps = std::max(std::labs(cb - ca), std::labs(rb - ra));
     if (steps < 2) return true;
     // The cell halfway along the grid line (a and b lie on one row, column or diagonal).
     const long half = steps / 2;
-    const auto mid = static_cast<std::uint32_t>((ra + (rb - ra) / steps * half) * width +
-                                                (ca + (cb - ca) / steps * half));
-    double xa, ya, xb, yb, xm, ym;
-    if (!position(a, xa, ya) || !position(b, xb, yb) || !position(mid, xm, ym)) return false;
-    const double dx = xb - xa, dy = yb - ya;
+    const long cm = ca + (cb - ca) / steps * half, rm = ra + (rb - ra) / steps * half;
+    double x[3], y[3];
+    const long cs[3] = {ca, cb, cm}, rs[3] = {ra, rb, rm};
+    for (int i = 0; i < 3; ++i) {
+      const double c = static_cast<double>(cs[i] + col0) + 0.5;
+      const double r = static_cast<double>(rs[i] + row0) + 0.5;
+      x[i] = g[0] + c * g[1] + r * g[2];
+      y[i] = g[3] + c * g[4] + r * g[5];
+    }
+    int ok[3] = {0, 0, 0};
+    {
+      std::lock_guard<std::mutex> hold(shared->lock);
+      if (!shared->ct->Transform(3, x, y, nullptr, ok) || !ok[0] || !ok[1] || !ok[2]) {
+        return false;
+      }
+    }
+    const double dx = x[1] - x[0], dy = y[1] - y[0];
     const double len = std::hypot(dx, dy);
-    const double off = len > 0 ? std::fabs(dx * (ym - ya) - dy * (xm - xa)) / len : 0.0;
+    const double off = len > 0 ? std::fabs(dx * (y[2] - y[0]) - dy * (x[2] - x[0])) / len : 0.0;
     return off * unit_m <= tolerance_m;
   };
 }
 
-Dem read_dem(const std::string& path, const DemReadOptions& options,
-             const core::Progress& progress) {
-  Dem dem;
+DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
+  DemInfo dem;
   dem.path = path;
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(path + ": no such file");
@@ -267,41 +273,75 @@ Dem read_dem(const std::string& path, const DemReadOptions& options,
     throw InputError(path + ": degenerate cell geometry (zero or non-finite cell size)");
   }
 
-  // Read band 1 in block-aligned strips of rows.
   GDALRasterBand* band = ds->GetRasterBand(1);
   int has_nodata = 0;
-  const double nodata = band->GetNoDataValue(&has_nodata);
-  const bool float32 = band->GetRasterDataType() == GDT_Float32;
-  int block_x = 0, block_y = 0;
-  band->GetBlockSize(&block_x, &block_y);
-  const int strip = std::max(1, block_y) * std::max(1, (1 << 22) / (std::max(1, block_y) * width));
-  dem.grid.width = width;
-  dem.grid.height = height;
-  dem.grid.z.resize(static_cast<std::size_t>(width) * height);
-  for (int r0 = 0; r0 < height; r0 += strip) {
-    const int rows = std::min(strip, height - r0);
-    double* dst_rows = dem.grid.z.data() + static_cast<std::size_t>(r0) * width;
+  dem.nodata = band->GetNoDataValue(&has_nodata);
+  dem.has_nodata = has_nodata != 0;
+  dem.float32 = band->GetRasterDataType() == GDT_Float32;
+  band->GetBlockSize(&dem.block_width, &dem.block_height);
+  dem.block_width = std::max(1, dem.block_width);
+  dem.block_height = std::max(1, dem.block_height);
+  dem.width = width;
+  dem.height = height;
+  return dem;
+}
+
+WindowReader::WindowReader(const DemInfo& info) : info_(info), dataset_(nullptr) {
+  CPLErrorReset();
+  dataset_ = GDALDataset::Open(info.path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY);
+  if (!dataset_ || static_cast<GDALDataset*>(dataset_)->GetRasterCount() < 1) {
+    if (dataset_) GDALClose(dataset_);
+    throw InputError(info.path + ": cannot open it again (" + last_gdal_error() + ")");
+  }
+}
+
+WindowReader::~WindowReader() { GDALClose(dataset_); }
+
+core::HeightGrid WindowReader::read(int col0, int row0, int width, int height,
+                                    const core::Progress& progress) {
+  GDALRasterBand* band = static_cast<GDALDataset*>(dataset_)->GetRasterBand(1);
+  core::HeightGrid grid;
+  grid.width = width;
+  grid.height = height;
+  grid.z.resize(static_cast<std::size_t>(width) * height);
+  // Strips of whole blocks of about 4M cells.
+  const int bh = info_.block_height;
+  const int strip = bh * std::max(1, (1 << 22) / std::max(1, bh * width));
+  const int end = row0 + height;
+  for (int r = row0; r < end;) {
+    const int next = std::min(end, (r / bh) * bh + strip);
+    const int rows = next - r;
+    double* dst = grid.z.data() + static_cast<std::size_t>(r - row0) * width;
     CPLErrorReset();
-    if (band->RasterIO(GF_Read, 0, r0, width, rows, dst_rows, width, rows, GDT_Float64, 0, 0,
+    if (band->RasterIO(GF_Read, col0, r, width, rows, dst, width, rows, GDT_Float64, 0, 0,
                        nullptr) != CE_None) {
-      throw InputError(path + ": read failed at rows " + std::to_string(r0) + "-" +
-                       std::to_string(r0 + rows - 1) + " (" + last_gdal_error() + ")");
+      throw InputError(info_.path + ": read failed at rows " + std::to_string(r) + "-" +
+                       std::to_string(next - 1) + " (" + last_gdal_error() + ")");
     }
-    if (progress && !progress(static_cast<double>(r0 + rows) / height, "read")) throw Cancelled();
+    r = next;
+    if (progress && !progress(static_cast<double>(r - row0) / height, "read")) throw Cancelled();
   }
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  for (double& z : dem.grid.z) {
+  const bool f32 = info_.float32;
+  const double nd = info_.nodata;
+  for (double& z : grid.z) {
     const bool is_nodata =
-        has_nodata && (float32 ? static_cast<float>(z) == static_cast<float>(nodata) : z == nodata);
-    if (is_nodata || !std::isfinite(z)) {
-      z = nan;
-    } else {
-      ++dem.valid_cells;
-    }
+        info_.has_nodata && (f32 ? static_cast<float>(z) == static_cast<float>(nd) : z == nd);
+    if (is_nodata || !std::isfinite(z)) z = nan;
   }
+  return grid;
+}
+
+Dem read_dem(const std::string& path, const DemReadOptions& options,
+             const core::Progress& progress) {
+  Dem dem;
+  static_cast<DemInfo&>(dem) = open_dem(path, options);
+  WindowReader reader(dem);
+  dem.grid = reader.read(0, 0, dem.width, dem.height, progress);
+  for (double z : dem.grid.z) dem.valid_cells += std::isnan(z) ? 0 : 1;
   if (dem.valid_cells == 0) {
     throw InputError(path + ": band 1 is all no-data" +
-                     (has_nodata ? " (" + std::to_string(nodata) + ")" : std::string()));
+                     (dem.has_nodata ? " (" + std::to_string(dem.nodata) + ")" : std::string()));
   }
   return dem;
 }

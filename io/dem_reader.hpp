@@ -24,35 +24,77 @@ struct TransformDeleter {
   void operator()(OGRCoordinateTransformation* t) const;
 };
 
-// A DEM in memory: heights (NaN = no-data) and the geometry of its cells.
-struct Dem {
+// Everything about a DEM but its heights: size, geometry, CRS handling, no-data. Opening one
+// reads no heights, so a DEM of any size can be described, divided and read window by window.
+struct DemInfo {
   std::string path;
-  core::HeightGrid grid;
+  int width = 0, height = 0;
   core::GridFrame frame;           // metric frame of the grid (see core/grid.hpp)
   std::string output_wkt;          // CRS of the output coordinates; empty if the DEM has none
   std::string output_crs_name;     // short name for messages
   std::vector<std::string> notes;  // what the user should know (CRS choices, warnings)
-  std::size_t valid_cells = 0;
   double metres_per_output_unit = 1.0;
   double geotransform[6] = {0, 1, 0, 0, 0, -1};
-  std::unique_ptr<OGRCoordinateTransformation, TransformDeleter> to_output;  // null: identity
+  bool has_nodata = false;
+  double nodata = 0;
+  bool float32 = false;  // band type Float32: no-data compares in single precision
+  int block_width = 0, block_height = 0;
+  std::unique_ptr<OGRCoordinateTransformation, TransformDeleter> to_output;    // null: identity
+  std::unique_ptr<OGRCoordinateTransformation, TransformDeleter> from_output;  // null: identity
+
+  std::size_t cell_count() const { return static_cast<std::size_t>(width) * height; }
 
   // Cell centres of the given cells (row-major indices) in the output CRS: x0, y0, x1, ...
-  // Throws IoError if the CRS transformation fails.
+  // Throws IoError if the CRS transformation fails. Not thread-safe (one transformation).
   std::vector<double> output_xy(const std::vector<std::uint32_t>& cells) const;
 
   // Grid positions (col, row; cell centres at integers) of points given in the output CRS:
   // the inverse of output_xy. Throws IoError if the CRS transformation fails.
   std::vector<double> grid_xy(const std::vector<double>& output_xy) const;
 
-  std::unique_ptr<OGRCoordinateTransformation, TransformDeleter> from_output;  // null: identity
+  // For a reprojected DEM (to_output set): a thread-safe test for core's outline rule, for an
+  // Eliminator working on the window of `window_width` columns whose first cell is (col0,
+  // row0) (window-local cell indices). It accepts the straight outline chord from cell a to
+  // cell b when the exact projection of the outline cell halfway between them lies within
+  // tolerance_m of the chord (the grid line is a smooth curve in the output CRS, farthest from
+  // its chord near the middle). Null for a DEM whose frame is exact.
+  std::function<bool(std::uint32_t, std::uint32_t)> outline_chord_test(double tolerance_m,
+                                                                       int col0 = 0, int row0 = 0,
+                                                                       int window_width = 0) const;
 
-  // For a reprojected DEM (to_output set): a thread-safe test for core's outline rule. It
-  // accepts the straight outline chord from cell a to cell b when the exact projection of the
-  // outline cell halfway between them lies within tolerance_m of the chord (the grid line is
-  // a smooth curve in the output CRS, farthest from its chord near the middle). Null for a DEM
-  // whose frame is exact. Precomputes the output positions of all outline cells.
-  std::function<bool(std::uint32_t, std::uint32_t)> outline_chord_test(double tolerance_m) const;
+  // The tolerance dpts-par uses for outline_chord_test: 1 % of a cell.
+  double outline_tolerance_m() const;
+};
+
+// A DEM in memory: its description and all its heights (NaN = no-data).
+struct Dem : DemInfo {
+  core::HeightGrid grid;
+  std::size_t valid_cells = 0;
+};
+
+// Opens band 1 of `path` and checks it without reading heights: throws InputError naming the
+// file (missing, not a raster, no band, too small or too large, degenerate geotransform), or
+// UsageError for a bad --t-srs. GDALAllRegister() must have been called.
+DemInfo open_dem(const std::string& path, const DemReadOptions& options);
+
+// Reads windows of band 1 through its own GDAL dataset handle (GDAL handles are not
+// thread-safe: one reader per thread or task). No-data, NaN and infinite heights become NaN.
+class WindowReader {
+ public:
+  explicit WindowReader(const DemInfo& info);
+  ~WindowReader();
+  WindowReader(const WindowReader&) = delete;
+  WindowReader& operator=(const WindowReader&) = delete;
+
+  // Heights of columns [col0, col0 + width) and rows [row0, row0 + height), read in strips of
+  // whole blocks. Throws InputError naming the file and rows when GDAL fails. Calls progress
+  // (if given) with stage "read" after each strip.
+  core::HeightGrid read(int col0, int row0, int width, int height,
+                        const core::Progress& progress = nullptr);
+
+ private:
+  const DemInfo& info_;
+  void* dataset_;  // GDALDataset*
 };
 
 // Reads band 1 of `path`. No-data cells, NaN and infinite heights become NaN. Checks the

@@ -8,11 +8,16 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <random>
 #include <sstream>
 #include <stdexcept>
+
+#include "core/footprint.hpp"
+#include "core/mesh_check.hpp"
 
 namespace dpts::test {
 
@@ -118,6 +123,64 @@ std::vector<double> grid_xy(const core::HeightGrid& grid, const core::Tin& tin) 
 
 std::string shared_data(const std::string& name) {
   return std::string(DPTS_SHARED_DATA_DIR) + "/" + name;
+}
+
+// Frame positions of a TIN's vertices.
+std::vector<double> frame_xy(const core::HeightGrid& g, const core::GridFrame& f,
+                             const core::Tin& tin) {
+  std::vector<double> xy;
+  for (std::uint32_t cell : tin.cells) {
+    const int c = static_cast<int>(cell % g.width), r = static_cast<int>(cell / g.width);
+    xy.push_back(f.u(c, r));
+    xy.push_back(f.w(c, r));
+  }
+  return xy;
+}
+
+// Number of interior edges whose opposite vertex lies strictly inside the circumcircle.
+std::size_t non_delaunay_edges(const std::vector<double>& xy, const core::Tin& tin) {
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t>
+      apex_of;  // directed edge -> apex
+  for (const auto& f : tin.faces) {
+    for (int i = 0; i < 3; ++i) apex_of[{f[i], f[(i + 1) % 3]}] = f[(i + 2) % 3];
+  }
+  std::size_t bad = 0;
+  for (const auto& [edge, apex] : apex_of) {
+    const auto twin = apex_of.find({edge.second, edge.first});
+    if (twin == apex_of.end()) continue;
+    auto P = [&](std::uint32_t v) { return std::pair<double, double>{xy[2 * v], xy[2 * v + 1]}; };
+    const auto [ax, ay] = P(edge.first);
+    const auto [bx, by] = P(edge.second);
+    const auto [cx, cy] = P(apex);
+    const auto [dx, dy] = P(twin->second);
+    // In-circle determinant of d against ccw triangle (a, b, c).
+    const double adx = ax - dx, ady = ay - dy, bdx = bx - dx, bdy = by - dy, cdx = cx - dx,
+                 cdy = cy - dy;
+    const double det = (adx * adx + ady * ady) * (bdx * cdy - bdy * cdx) -
+                       (bdx * bdx + bdy * bdy) * (adx * cdy - ady * cdx) +
+                       (cdx * cdx + cdy * cdy) * (adx * bdy - ady * bdx);
+    if (det > 1e-9) ++bad;
+  }
+  return bad;
+}
+
+// Checks every structural property of a simplified TIN over grid g.
+void check_tin(const core::HeightGrid& g, const core::Tin& tin, const core::GridFrame& f) {
+  const auto xy = frame_xy(g, f, tin);
+  const core::MeshCheck mc = core::check_mesh(xy, tin.faces);
+  CHECK(mc.clockwise_or_flat == 0);
+  CHECK(mc.bad_edges == 0);
+  const double det = std::fabs(f.m[0][0] * f.m[1][1] - f.m[0][1] * f.m[1][0]);
+  CHECK(mc.area == Approx(core::footprint_area_cells(g) * det).epsilon(1e-12));
+  CHECK(core::faces_over_nodata(g, grid_xy(g, tin), tin.faces) == 0);
+  CHECK(non_delaunay_edges(xy, tin) == 0);
+  CHECK(std::is_sorted(tin.cells.begin(), tin.cells.end()));
+  // Every kept vertex is used by a face.
+  std::vector<bool> used(tin.cells.size(), false);
+  for (const auto& face : tin.faces) {
+    for (auto v : face) used[v] = true;
+  }
+  CHECK(std::count(used.begin(), used.end(), false) == 0);
 }
 
 }  // namespace dpts::test

@@ -44,6 +44,18 @@ void write_geotiff(const std::filesystem::path& path, const core::HeightGrid& gr
 // Grid positions (col, row) of a TIN's vertices, for footprint checks.
 std::vector<double> grid_xy(const core::HeightGrid& grid, const core::Tin& tin);
 
+// Frame positions of a TIN's vertices (cells of grid g).
+std::vector<double> frame_xy(const core::HeightGrid& g, const core::GridFrame& f,
+                             const core::Tin& tin);
+
+// Number of interior edges whose opposite vertex lies strictly inside the circumcircle.
+std::size_t non_delaunay_edges(const std::vector<double>& xy, const core::Tin& tin);
+
+// Checks (Catch2 CHECKs) every structural property of a simplified TIN over grid g:
+// counter-clockwise faces, proper edges, area = the footprint's, no face over no-data,
+// Delaunay, cells sorted, every vertex used.
+void check_tin(const core::HeightGrid& g, const core::Tin& tin, const core::GridFrame& f = {});
+
 // The shared real-DEM folder (../shared/data).
 std::string shared_data(const std::string& name);
 

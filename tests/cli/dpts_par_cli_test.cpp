@@ -108,7 +108,7 @@ TEST_CASE("bad usage exits 2 with a one-line message naming the flag, creating n
       {{"--vertices", "2", fx.dem, out}, "--vertices 2: expected an integer >= 3"},
       {{"--keep", "10%", "--vertices", "50", fx.dem, out},
        "--keep and --vertices: give one, not both"},
-      {{"--algo", "qslim", fx.dem, out}, "--algo qslim: expected vp or pld"},
+      {{"--algo", "qslim", fx.dem, out}, "--algo qslim: expected vp, pld, vp-meta or pld-meta"},
       {{"--threads", "0", fx.dem, out}, "--threads 0: expected an integer >= 1"},
       {{"--bogus", fx.dem, out}, "--bogus: unknown option"},
       {{fx.dem}, "expected INPUT and OUTPUT"},

@@ -38,64 +38,6 @@ core::Tin simplify(const core::HeightGrid& g, core::Importance kind, std::size_t
   return par::simplify_dem(g, frame, opt, target, nullptr);
 }
 
-// Frame positions of a TIN's vertices.
-std::vector<double> frame_xy(const core::HeightGrid& g, const core::GridFrame& f,
-                             const core::Tin& tin) {
-  std::vector<double> xy;
-  for (std::uint32_t cell : tin.cells) {
-    const int c = static_cast<int>(cell % g.width), r = static_cast<int>(cell / g.width);
-    xy.push_back(f.u(c, r));
-    xy.push_back(f.w(c, r));
-  }
-  return xy;
-}
-
-// Number of interior edges whose opposite vertex lies strictly inside the circumcircle.
-std::size_t non_delaunay_edges(const std::vector<double>& xy, const core::Tin& tin) {
-  std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t>
-      apex_of;  // directed edge -> apex
-  for (const auto& f : tin.faces) {
-    for (int i = 0; i < 3; ++i) apex_of[{f[i], f[(i + 1) % 3]}] = f[(i + 2) % 3];
-  }
-  std::size_t bad = 0;
-  for (const auto& [edge, apex] : apex_of) {
-    const auto twin = apex_of.find({edge.second, edge.first});
-    if (twin == apex_of.end()) continue;
-    auto P = [&](std::uint32_t v) { return std::pair<double, double>{xy[2 * v], xy[2 * v + 1]}; };
-    const auto [ax, ay] = P(edge.first);
-    const auto [bx, by] = P(edge.second);
-    const auto [cx, cy] = P(apex);
-    const auto [dx, dy] = P(twin->second);
-    // In-circle determinant of d against ccw triangle (a, b, c).
-    const double adx = ax - dx, ady = ay - dy, bdx = bx - dx, bdy = by - dy, cdx = cx - dx,
-                 cdy = cy - dy;
-    const double det = (adx * adx + ady * ady) * (bdx * cdy - bdy * cdx) -
-                       (bdx * bdx + bdy * bdy) * (adx * cdy - ady * cdx) +
-                       (cdx * cdx + cdy * cdy) * (adx * bdy - ady * bdx);
-    if (det > 1e-9) ++bad;
-  }
-  return bad;
-}
-
-// Checks every structural property of a simplified TIN over grid g.
-void check_tin(const core::HeightGrid& g, const core::Tin& tin, const core::GridFrame& f = {}) {
-  const auto xy = frame_xy(g, f, tin);
-  const core::MeshCheck mc = core::check_mesh(xy, tin.faces);
-  CHECK(mc.clockwise_or_flat == 0);
-  CHECK(mc.bad_edges == 0);
-  const double det = std::fabs(f.m[0][0] * f.m[1][1] - f.m[0][1] * f.m[1][0]);
-  CHECK(mc.area == Approx(core::footprint_area_cells(g) * det).epsilon(1e-12));
-  CHECK(core::faces_over_nodata(g, test::grid_xy(g, tin), tin.faces) == 0);
-  CHECK(non_delaunay_edges(xy, tin) == 0);
-  CHECK(std::is_sorted(tin.cells.begin(), tin.cells.end()));
-  // Every kept vertex is used by a face.
-  std::vector<bool> used(tin.cells.size(), false);
-  for (const auto& face : tin.faces) {
-    for (auto v : face) used[v] = true;
-  }
-  CHECK(std::count(used.begin(), used.end(), false) == 0);
-}
-
 }  // namespace
 
 TEST_CASE("elimination keeps exactly the requested count and the exact footprint",
@@ -107,7 +49,7 @@ TEST_CASE("elimination keeps exactly the requested count and the exact footprint
   const auto keep = static_cast<std::size_t>(share * input);
   const core::Tin tin = simplify(g, kind, keep);
   CHECK(tin.cells.size() == keep);
-  check_tin(g, tin);
+  test::check_tin(g, tin);
 }
 
 TEST_CASE("the unsimplified TIN is the grid split along NW-SE diagonals", "[core][simplify]") {
@@ -133,7 +75,7 @@ TEST_CASE("a plane simplifies to its four corners", "[core][simplify]") {
   REQUIRE(tin.cells.size() == 4);
   CHECK(tin.cells == std::vector<std::uint32_t>{0, 11, 8 * 12, 8 * 12 + 11});
   CHECK(tin.faces.size() == 2);
-  check_tin(g, tin);
+  test::check_tin(g, tin);
 }
 
 TEST_CASE("corners and bends of the outline are never removed", "[core][simplify]") {
@@ -142,7 +84,7 @@ TEST_CASE("corners and bends of the outline are never removed", "[core][simplify
   const auto g = hills(24, 20);
   const core::Tin tin = simplify(g, core::Importance::vp, 3);
   CHECK(tin.cells.size() > 3);
-  check_tin(g, tin);
+  test::check_tin(g, tin);
   // The DEM's corners that hold data are kept.
   for (std::uint32_t corner :
        {std::uint32_t(23), std::uint32_t(19 * 24), std::uint32_t(19 * 24 + 23)}) {
@@ -160,7 +102,7 @@ TEST_CASE("void holes stay open at every level of simplification", "[core][simpl
   for (double share : {0.5, 0.2}) {
     const core::Tin tin =
         simplify(g, core::Importance::vp, static_cast<std::size_t>(share * input));
-    check_tin(g, tin);
+    test::check_tin(g, tin);
   }
 }
 
@@ -172,7 +114,7 @@ TEST_CASE("elimination works in a sheared, non-square frame", "[core][simplify]"
   const std::size_t input = core::surface_cells(g).size();
   const core::Tin tin = simplify(g, core::Importance::vp, input / 5, frame);
   CHECK(tin.cells.size() == input / 5);
-  check_tin(g, tin, frame);
+  test::check_tin(g, tin, frame);
 }
 
 TEST_CASE("the result does not depend on how initial importance is split", "[core][determinism]") {
@@ -207,7 +149,7 @@ TEST_CASE("VP keeps a spike and drops flat ground first", "[core][simplify][vp]"
       test::make_grid(15, 15, [](int c, int r) { return c == 7 && r == 7 ? 50.0 : 0.0; });
   const core::Tin tin = simplify(g, core::Importance::vp, 10);
   CHECK(std::binary_search(tin.cells.begin(), tin.cells.end(), std::uint32_t(7 * 15 + 7)));
-  check_tin(g, tin);
+  test::check_tin(g, tin);
 }
 
 TEST_CASE("an outline chord the caller refuses keeps its outline vertices", "[core][simplify]") {
@@ -242,5 +184,5 @@ TEST_CASE("an outline chord the caller refuses keeps its outline vertices", "[co
   CHECK(on_outline - 4 >= 14);  // corners counted twice
   CHECK(on_outline - 4 < 38);
   CHECK(tin.cells.size() == on_outline - 4);  // the plane's interior is all gone
-  check_tin(g, tin);
+  test::check_tin(g, tin);
 }

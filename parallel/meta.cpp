@@ -1,0 +1,432 @@
+// PLD'/VP' as a parallel, out-of-core engine (see meta.hpp).
+#include "parallel/meta.hpp"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <stdexcept>
+
+#include "core/errors.hpp"
+#include "core/footprint.hpp"
+#include "core/merge.hpp"
+#include "core/piece_budget.hpp"
+#include "core/surface_sampling.hpp"
+#include "parallel/evaluate.hpp"
+
+namespace dpts::par {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+std::uint64_t piece_seed(std::uint64_t seed, std::size_t piece) {
+  std::uint64_t h = (seed + 0x9E3779B97F4A7C15ull) * 0xBF58476D1CE4E5B9ull;
+  h ^= (piece + 1) * 0x94D049BB133111EBull;
+  return h ^ (h >> 31);
+}
+
+// Progress from concurrent tasks, serialized; remembers a refusal so every task stops.
+class SharedProgress {
+ public:
+  SharedProgress(const core::Progress& progress, std::size_t parts)
+      : progress_(progress), partial_(parts, 0.0) {}
+  // Reports part i at fraction f of its work; false once the run is to stop.
+  bool update(std::size_t i, double f, std::string_view stage) {
+    if (stop_) return false;
+    std::lock_guard<std::mutex> hold(lock_);
+    sum_ += f - partial_[i];
+    partial_[i] = f;
+    if (progress_ && !progress_(sum_ / static_cast<double>(partial_.size()), stage)) stop_ = true;
+    return !stop_;
+  }
+  void check() const {
+    if (stop_) throw Cancelled();
+  }
+
+ private:
+  const core::Progress& progress_;
+  std::vector<double> partial_;
+  double sum_ = 0;
+  std::mutex lock_;
+  std::atomic<bool> stop_{false};
+};
+
+// One streaming pass over the raster in strips of whole rows: surface vertices per block.
+core::BlockCounts count_blocks(const io::DemInfo& dem, std::size_t strip_bytes,
+                               const core::Progress& progress, std::size_t* valid_cells) {
+  core::BlockCounts bc;
+  bc.width = dem.width;
+  bc.height = dem.height;
+  bc.block = 16;
+  auto blocks = [&](int b) {
+    return static_cast<double>((dem.width + b - 1) / b) * ((dem.height + b - 1) / b);
+  };
+  while (blocks(bc.block) > double(1 << 20)) bc.block *= 2;
+  bc.blocks_x = (dem.width + bc.block - 1) / bc.block;
+  bc.blocks_y = (dem.height + bc.block - 1) / bc.block;
+  bc.counts.assign(static_cast<std::size_t>(bc.blocks_x) * bc.blocks_y, 0);
+  // Strips of whole blocks of the raster (GDAL reads whole blocks anyway), within the budget.
+  const std::size_t row_bytes = static_cast<std::size_t>(dem.width) * sizeof(double);
+  int strip = static_cast<int>(std::max<std::size_t>(1, strip_bytes / row_bytes));
+  strip = std::max(dem.block_height, strip / dem.block_height * dem.block_height);
+  io::WindowReader reader(dem);
+  *valid_cells = 0;
+  for (int r0 = 0; r0 < dem.height; r0 += strip) {
+    const int r1 = std::min(dem.height, r0 + strip);
+    // One row more on each side: whether a cell is a surface vertex depends on its neighbours.
+    const int a = std::max(0, r0 - 1), b = std::min(dem.height, r1 + 1);
+    const core::HeightGrid g = reader.read(0, a, dem.width, b - a);
+    for (int r = r0 - a; r < r1 - a; ++r) {
+      for (int c = 0; c < g.width; ++c) *valid_cells += g.is_valid(c, r) ? 1 : 0;
+    }
+    for (std::uint32_t cell : core::surface_cells(g)) {
+      const int row = static_cast<int>(cell / static_cast<std::uint32_t>(g.width)) + a;
+      const int col = static_cast<int>(cell % static_cast<std::uint32_t>(g.width));
+      if (row < r0 || row >= r1) continue;
+      ++bc.counts[static_cast<std::size_t>(row / bc.block) * bc.blocks_x + col / bc.block];
+    }
+    if (progress && !progress(static_cast<double>(r1) / dem.height, "count")) throw Cancelled();
+  }
+  return bc;
+}
+
+// What a piece hands to the merge: the own vertices it kept after going `tail` removals
+// beyond its budget, those last removals in order (so the merge can take back any number of
+// them), and the outline edges touching own vertices at the deepest state.
+struct PieceOutput {
+  std::vector<std::uint32_t> cells;
+  std::vector<double> z;
+  std::vector<core::OutlineEdge> outline;
+  std::vector<core::Removal> tail;
+  std::vector<double> tail_z;
+  std::size_t kept_at_budget = 0;
+};
+
+// Reads a piece with its context, simplifies it to `budget` own vertices, and returns the
+// own vertices it kept and the outline edges that touch them (raster cell indices).
+PieceOutput simplify_piece(const io::DemInfo& dem, const core::Piece& p, std::size_t budget,
+                           const MetaOptions& options, PieceReport& report,
+                           const core::Progress& progress) {
+  const int halo = std::max(2, options.halo);
+  const int wc0 = std::max(0, p.col0 - halo), wr0 = std::max(0, p.row0 - halo);
+  const int wc1 = std::min(dem.width, p.col0 + p.width + halo);
+  const int wr1 = std::min(dem.height, p.row0 + p.height + halo);
+  const int ww = wc1 - wc0, wh = wr1 - wr0;
+  auto t0 = std::chrono::steady_clock::now();
+  core::HeightGrid grid;
+  {
+    io::WindowReader reader(dem);
+    grid = reader.read(wc0, wr0, ww, wh);
+  }
+  report.read_s = seconds_since(t0);
+  t0 = std::chrono::steady_clock::now();
+  // Own cells (window-local): the piece. The rest is context: triangulated, never removed.
+  const int oc0 = p.col0 - wc0, or0 = p.row0 - wr0, oc1 = oc0 + p.width, or1 = or0 + p.height;
+  auto own = [&](int c, int r) { return c >= oc0 && c < oc1 && r >= or0 && r < or1; };
+  core::EliminationOptions eo = options.elimination;
+  eo.pinned.assign(grid.z.size(), 0);
+  for (int r = 0; r < wh; ++r) {
+    for (int c = 0; c < ww; ++c) {
+      std::uint8_t& pin = eo.pinned[grid.index(c, r)];
+      if (!own(c, r)) {
+        pin = 1;
+        continue;
+      }
+      if (c != oc0 && c != oc1 - 1 && r != or0 && r != or1 - 1) continue;
+      // An own outline cell next to another piece: the outline may run on into that piece,
+      // where only that piece knows which cells stay. Keep it, so that every chord the merged
+      // TIN has was checked by the one piece that owns both its ends.
+      bool outline = false, foreign = false;
+      for (int dr = -1; dr <= 1; ++dr) {
+        for (int dc = -1; dc <= 1; ++dc) {
+          const int gc = wc0 + c + dc, gr = wr0 + r + dr;
+          const bool in_raster = gc >= 0 && gr >= 0 && gc < dem.width && gr < dem.height;
+          if (!in_raster || !grid.is_valid(c + dc, r + dr)) outline = true;
+          if (in_raster && !own(c + dc, r + dr)) foreign = true;
+        }
+      }
+      if (outline && foreign) pin = 1;
+    }
+  }
+  // Beyond the window's sides lie other pieces' cells, except where the raster ends. (A piece
+  // that is the whole raster has no neighbour to be merged with: no box.)
+  const double inf = std::numeric_limits<double>::infinity();
+  if (wc0 > 0 || wr0 > 0 || wc1 < dem.width || wr1 < dem.height) {
+    eo.chord_box =
+        core::EliminationOptions::Box{wc0 == 0 ? -inf : 0.0, wc1 == dem.width ? inf : ww - 1.0,
+                                      wr0 == 0 ? -inf : 0.0, wr1 == dem.height ? inf : wh - 1.0};
+  }
+  eo.outline_chord_ok = dem.outline_chord_test(dem.outline_tolerance_m(), wc0, wr0, ww);
+
+  core::Eliminator elim(grid, dem.frame, eo);
+  const auto& cells = elim.cells();
+  auto own_cell = [&](std::uint32_t cell) {
+    return own(static_cast<int>(cell % static_cast<std::uint32_t>(ww)),
+               static_cast<int>(cell / static_cast<std::uint32_t>(ww)));
+  };
+  std::size_t own_count = 0;
+  for (std::uint32_t cell : cells) own_count += own_cell(cell) ? 1 : 0;
+  if (own_count != p.vertices) {
+    throw std::logic_error("piece at column " + std::to_string(p.col0) + ", row " +
+                           std::to_string(p.row0) + " has " + std::to_string(own_count) +
+                           " surface vertices, the count pass found " + std::to_string(p.vertices));
+  }
+  tbb::this_task_arena::isolate([&] {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells.size(), 2048),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        elim.compute_importance(r.begin(), r.end());
+                      });
+  });
+  const std::size_t context = cells.size() - own_count;
+  elim.eliminate(budget + context, progress);
+  PieceOutput out;
+  out.kept_at_budget = elim.alive_count() - context;
+  // A few removals more, logged: when other pieces cannot reach their budgets (their outline
+  // needs more vertices), the merge takes these to keep the total exact.
+  if (out.kept_at_budget == budget) {
+    const std::size_t tail = std::min(budget > 3 ? budget - 3 : 0, budget / 50 + 8);
+    elim.eliminate(budget + context - tail, progress, &out.tail);
+  }
+  auto global = [&](std::uint32_t cell) {
+    const auto c = static_cast<std::uint32_t>(wc0) + cell % static_cast<std::uint32_t>(ww);
+    const auto r = static_cast<std::uint32_t>(wr0) + cell / static_cast<std::uint32_t>(ww);
+    return r * static_cast<std::uint32_t>(dem.width) + c;
+  };
+  for (std::size_t id = 0; id < cells.size(); ++id) {
+    if (!elim.alive(id) || !own_cell(cells[id])) continue;
+    out.cells.push_back(global(cells[id]));
+    out.z.push_back(grid.z[cells[id]]);
+  }
+  for (const core::OutlineEdge& e : elim.outline_edges()) {
+    if (own_cell(e[0]) || own_cell(e[1])) out.outline.push_back({global(e[0]), global(e[1])});
+  }
+  for (core::Removal& r : out.tail) {
+    out.tail_z.push_back(grid.z[r.cell]);
+    r.cell = global(r.cell);
+    r.prev = global(r.prev);
+    r.next = global(r.next);
+  }
+  report.simplify_s = seconds_since(t0);
+  return out;
+}
+
+}  // namespace
+
+double piece_value(const core::HeightGrid& window, int col0, int row0, const core::GridFrame& frame,
+                   int points, int max_cells, std::uint64_t seed) {
+  const int w = window.width, h = window.height;
+  int s = 1;
+  while (static_cast<double>((w + s - 1) / s) * ((h + s - 1) / s) > max_cells) ++s;
+  core::HeightGrid sub;
+  sub.width = (w + s - 1) / s;
+  sub.height = (h + s - 1) / s;
+  sub.z.resize(static_cast<std::size_t>(sub.width) * sub.height);
+  for (int j = 0; j < sub.height; ++j) {
+    for (int i = 0; i < sub.width; ++i)
+      sub.z[sub.index(i, j)] = window.z[window.index(i * s, j * s)];
+  }
+  const core::GridTin tin = core::grid_tin(sub);
+  if (tin.faces.empty() || points < 2) return 1.0;
+  core::TriMesh mesh;
+  const double m = frame.metres_per_unit;
+  for (std::uint32_t cell : tin.cells) {
+    const int i = static_cast<int>(cell % static_cast<std::uint32_t>(sub.width));
+    const int j = static_cast<int>(cell / static_cast<std::uint32_t>(sub.width));
+    const int c = col0 + i * s, r = row0 + j * s;
+    mesh.xyz.insert(mesh.xyz.end(), {m * frame.u(c, r), m * frame.w(c, r), sub.z[cell]});
+  }
+  mesh.faces = tin.faces;
+  core::fix_orientation(mesh);
+  const core::SteinerGraph graph(mesh, kDefaultDeltaFactor * core::mean_edge_length(mesh));
+  const auto pts = core::sample_uniform(mesh, static_cast<std::size_t>(points), seed);
+  const std::vector<double> gd = pairwise_distances(graph, pts);
+  double sum = 0;
+  std::size_t pairs = 0;
+  const std::size_t k = pts.size();
+  for (std::size_t a = 0; a < k; ++a) {
+    for (std::size_t b = a + 1; b < k; ++b) {
+      const double g = gd[a * k + b];
+      if (!(g > 0) || !std::isfinite(g)) continue;
+      const double dx = pts[a].x - pts[b].x, dy = pts[a].y - pts[b].y, dz = pts[a].z - pts[b].z;
+      sum += std::min(1.0, std::sqrt(dx * dx + dy * dy + dz * dz) / g);
+      ++pairs;
+    }
+  }
+  return pairs ? sum / pairs : 1.0;
+}
+
+MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
+                         const core::Progress& progress, MetaStats* stats) {
+  MetaStats local;
+  MetaStats& st = stats ? *stats : local;
+  const auto bytes = options.tile_bytes;
+
+  // 1. Count surface vertices per block, streaming; divide.
+  auto t0 = std::chrono::steady_clock::now();
+  const core::BlockCounts bc =
+      count_blocks(dem, std::max<std::size_t>(bytes / 4, 1 << 20), progress, &st.valid_cells);
+  st.block = bc.block;
+  st.count_s = seconds_since(t0);
+  if (st.valid_cells == 0) {
+    throw InputError(dem.path + ": band 1 is all no-data" +
+                     (dem.has_nodata ? " (" + std::to_string(dem.nodata) + ")" : std::string()));
+  }
+  core::DivisionOptions div;
+  div.levels = options.levels;
+  div.budget_bytes = bytes;
+  div.halo = options.halo;
+  const core::GridFrame& f = dem.frame;
+  div.col_metres = f.metres_per_unit * std::hypot(f.m[0][0], f.m[1][0]);
+  div.row_metres = f.metres_per_unit * std::hypot(f.m[0][1], f.m[1][1]);
+  const std::vector<core::Piece> pieces = core::kd_divide(bc, div);
+  std::size_t total = 0;
+  for (const auto& p : pieces) total += p.vertices;
+  if (total < 3) {
+    throw InputError(dem.path + ": no three neighbouring valid cells: nothing to triangulate");
+  }
+  st.input_vertices = total;
+  st.target_vertices = target_count(options.keep, total);
+  st.pieces.assign(pieces.size(), {});
+  for (std::size_t i = 0; i < pieces.size(); ++i) st.pieces[i].piece = pieces[i];
+
+  // 2. Piece values, concurrently: each task reads its piece through its own handle.
+  t0 = std::chrono::steady_clock::now();
+  {
+    SharedProgress shared(progress, pieces.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pieces.size(), 1),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                          shared.check();
+                          const core::Piece& p = pieces[i];
+                          core::HeightGrid g;
+                          {
+                            io::WindowReader reader(dem);
+                            g = reader.read(p.col0, p.row0, p.width, p.height);
+                          }
+                          tbb::this_task_arena::isolate([&] {
+                            st.pieces[i].value =
+                                piece_value(g, p.col0, p.row0, dem.frame, options.value_points,
+                                            options.value_cells, piece_seed(options.seed, i));
+                          });
+                          shared.update(i, 1.0, "values");
+                        }
+                      });
+    shared.check();
+  }
+  st.values_s = seconds_since(t0);
+
+  // 3. Budgets: the paper's P2L per piece, with the total exactly the target.
+  {
+    std::vector<std::size_t> counts;
+    std::vector<double> values;
+    for (const auto& p : st.pieces) {
+      counts.push_back(p.piece.vertices);
+      values.push_back(p.value);
+    }
+    const double p2l = 100.0 * static_cast<double>(st.target_vertices) / total;
+    const auto budgets = core::piece_budgets(counts, values, p2l);
+    for (std::size_t i = 0; i < budgets.size(); ++i) st.pieces[i].budget = budgets[i];
+  }
+
+  // 4. Simplify the pieces concurrently; keep only their kept vertices and outline edges.
+  t0 = std::chrono::steady_clock::now();
+  std::vector<PieceOutput> outputs(pieces.size());
+  {
+    SharedProgress shared(progress, pieces.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pieces.size(), 1),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                          shared.check();
+                          const core::Progress piece_progress = [&](double fr, std::string_view) {
+                            return shared.update(i, fr, "simplify");
+                          };
+                          outputs[i] = simplify_piece(dem, pieces[i], st.pieces[i].budget, options,
+                                                      st.pieces[i], piece_progress);
+                          shared.update(i, 1.0, "simplify");
+                        }
+                      });
+    shared.check();
+  }
+  st.simplify_s = seconds_since(t0);
+
+  // 5. Merge: one Delaunay triangulation of all kept vertices, in a fixed order.
+  t0 = std::chrono::steady_clock::now();
+  if (progress && !progress(0.0, "merge")) throw Cancelled();
+  // Pieces whose outline kept them above budget leave a deficit; the others make it up from
+  // their logged tails, in proportion to their tails' lengths (largest remainder).
+  std::size_t deficit = 0, room = 0;
+  for (std::size_t i = 0; i < outputs.size(); ++i) {
+    deficit += outputs[i].kept_at_budget - st.pieces[i].budget;
+    room += outputs[i].tail.size();
+  }
+  std::vector<std::size_t> extra(outputs.size(), 0);
+  if (deficit > 0 && room > 0) {
+    const std::size_t take = std::min(deficit, room);
+    std::vector<std::pair<double, std::size_t>> rest;
+    std::size_t given = 0;
+    for (std::size_t i = 0; i < outputs.size(); ++i) {
+      const double share = static_cast<double>(take) * outputs[i].tail.size() / room;
+      extra[i] = static_cast<std::size_t>(share);
+      given += extra[i];
+      rest.emplace_back(share - extra[i], i);
+    }
+    std::sort(rest.begin(), rest.end(), [](const auto& a, const auto& b) {
+      return a.first > b.first || (a.first == b.first && a.second < b.second);
+    });
+    for (std::size_t k = 0; given < take && k < rest.size(); ++k) {
+      const std::size_t i = rest[k].second;
+      if (extra[i] < outputs[i].tail.size()) ++extra[i], ++given;
+    }
+  }
+  std::vector<std::pair<std::uint32_t, double>> kept;
+  std::vector<core::OutlineEdge> outline;
+  for (std::size_t i = 0; i < outputs.size(); ++i) {
+    PieceOutput& o = outputs[i];
+    // Take back the tail's removals after the first extra[i], last first, splitting chords.
+    std::vector<core::OutlineEdge> edges = o.outline;
+    std::sort(edges.begin(), edges.end());
+    for (std::size_t j = o.tail.size(); j-- > extra[i];) {
+      const core::Removal& r = o.tail[j];
+      o.cells.push_back(r.cell);
+      o.z.push_back(o.tail_z[j]);
+      if (!r.outline) continue;
+      const core::OutlineEdge chord{r.prev, r.next};
+      const auto it = std::lower_bound(edges.begin(), edges.end(), chord);
+      if (it == edges.end() || *it != chord) {
+        throw std::logic_error("outline chord " + std::to_string(r.prev) + "-" +
+                               std::to_string(r.next) + " missing when restoring cell " +
+                               std::to_string(r.cell));
+      }
+      edges.erase(it);
+      for (const core::OutlineEdge& e :
+           {core::OutlineEdge{r.prev, r.cell}, core::OutlineEdge{r.cell, r.next}}) {
+        edges.insert(std::lower_bound(edges.begin(), edges.end(), e), e);
+      }
+    }
+    st.pieces[i].kept = o.cells.size();
+    for (std::size_t k = 0; k < o.cells.size(); ++k) kept.emplace_back(o.cells[k], o.z[k]);
+    outline.insert(outline.end(), edges.begin(), edges.end());
+    o = {};
+  }
+  std::sort(kept.begin(), kept.end());
+  MetaResult result;
+  std::vector<std::uint32_t> cells(kept.size());
+  result.z.resize(kept.size());
+  for (std::size_t k = 0; k < kept.size(); ++k)
+    cells[k] = kept[k].first, result.z[k] = kept[k].second;
+  kept = {};
+  result.tin = core::merge_kept(dem.width, dem.frame, cells, outline);
+  st.kept_vertices = result.tin.cells.size();
+  st.merge_s = seconds_since(t0);
+  if (progress && !progress(1.0, "merge")) throw Cancelled();
+  return result;
+}
+
+}  // namespace dpts::par

@@ -1,0 +1,68 @@
+// The meta method PLD'/VP' (the DPTS paper, sections 3.2 and 4.3) as a parallel, out-of-core
+// engine: a streaming count pass, a k-d division into pieces, piece values and P2L budgets,
+// oneTBB tasks that read and simplify pieces concurrently (each through its own GDAL handle),
+// and one Delaunay merge of the kept vertices. Only the kept vertices (and a small count grid)
+// are held for the whole DEM; everything else lives as long as one piece.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/elimination.hpp"
+#include "core/kd_division.hpp"
+#include "io/dem_reader.hpp"
+#include "parallel/simplify.hpp"
+
+namespace dpts::par {
+
+struct MetaOptions {
+  core::EliminationOptions elimination;  // importance and VP settings for every piece
+  KeepTarget keep;
+  int levels = 4;                                   // at least 2^levels pieces
+  std::size_t tile_bytes = std::size_t{256} << 20;  // one piece's working set must fit
+  int halo = 8;                                     // context cells round each piece
+  int value_points = 20;                            // l: random points per piece value
+  int value_cells = 4096;  // piece values on a grid of at most this many cells
+  std::uint64_t seed = 1;
+};
+
+struct PieceReport {
+  core::Piece piece;
+  double value = 0;        // mean ED/GD of the piece's random point pairs
+  std::size_t budget = 0;  // vertices the piece should keep
+  std::size_t kept = 0;    // vertices it kept (more than budget when its outline needs them)
+  double read_s = 0, simplify_s = 0;  // this piece's own times (simplify: triangulate to end)
+};
+
+struct MetaStats {
+  std::size_t input_vertices = 0, target_vertices = 0, kept_vertices = 0;
+  std::size_t valid_cells = 0;
+  int block = 0;
+  std::vector<PieceReport> pieces;
+  // Wall time per stage.
+  double count_s = 0, values_s = 0, simplify_s = 0, merge_s = 0;
+};
+
+struct MetaResult {
+  core::Tin tin;          // cells are raster cell indices (row-major), ascending
+  std::vector<double> z;  // height of each kept cell
+};
+
+// Runs the whole method on band 1 of the DEM. Progress is reported (serialized) with stages
+// "count", "values", "simplify", "merge"; returning false stops with dpts::Cancelled. Throws
+// InputError when the DEM has no surface, IoError/InputError when a read fails.
+MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
+                         const core::Progress& progress, MetaStats* stats = nullptr);
+
+// The piece value of the paper's CalcPieceValue on a window of heights: the mean ED/GD over
+// all pairs of `points` random points in the footprint (seeded), GD on the Steiner graph of
+// the grid TIN at the default delta. Windows larger than max_cells are subsampled (every s-th
+// row and column) to at most max_cells cells first: a tested cheaper equivalent (see
+// tests/parallel/meta_test.cpp). col0, row0 place the window in the raster (for the frame).
+// Returns 1 (flat) when the window has no face to sample.
+double piece_value(const core::HeightGrid& window, int col0, int row0, const core::GridFrame& frame,
+                   int points, int max_cells, std::uint64_t seed);
+
+}  // namespace dpts::par
