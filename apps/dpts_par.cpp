@@ -134,13 +134,28 @@ int run_meta(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer
           p.piece.col0, p.piece.row0, p.piece.width, p.piece.height, p.piece.vertices, p.value,
           100.0 * p.budget / p.piece.vertices, p.budget, p.kept, p.read_s, p.simplify_s);
     }
+    double longest = 0, sum = 0;
+    for (const auto& p : stats.pieces) {
+      longest = std::max(longest, p.read_s + p.simplify_s);
+      sum += p.read_s + p.simplify_s;
+    }
+    std::fprintf(stderr,
+                 "dpts-par: pieces: longest %.3f s, mean %.3f s (read + simplify); peak memory "
+                 "before the merge %.1f MB\n",
+                 longest, sum / static_cast<double>(std::max<std::size_t>(1, stats.pieces.size())),
+                 static_cast<double>(stats.peak_rss_before_merge_kb) / 1024.0);
     std::fprintf(stderr,
                  "dpts-par: stages: count %.2f s, values %.2f s, simplify %.2f s, merge %.2f s\n",
                  stats.count_s, stats.values_s, stats.simplify_s, stats.merge_s);
   }
   warn_kept(stats.kept_vertices, stats.target_vertices);
   const std::size_t faces = result.tin.faces.size();
+  const auto t_write = std::chrono::steady_clock::now();
   write_output(o, dem, std::move(result.tin), result.z, out);
+  if (o.verbose) {
+    std::fprintf(stderr, "dpts-par: stages: write %.2f s\n",
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t_write).count());
+  }
   summary(o, stats.input_vertices, stats.kept_vertices, faces, start);
   return 0;
 }

@@ -8,6 +8,8 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
 #include <limits>
 #include <mutex>
 #include <stdexcept>
@@ -219,6 +221,15 @@ PieceOutput simplify_piece(const io::DemInfo& dem, const core::Piece& p, std::si
 
 }  // namespace
 
+std::size_t peak_rss_kb() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) return std::strtoull(line.c_str() + 6, nullptr, 10);
+  }
+  return 0;
+}
+
 double piece_value(const core::HeightGrid& window, int col0, int row0, const core::GridFrame& frame,
                    int points, int max_cells, std::uint64_t seed) {
   const int w = window.width, h = window.height;
@@ -357,6 +368,7 @@ MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
   st.simplify_s = seconds_since(t0);
 
   // 5. Merge: one Delaunay triangulation of all kept vertices, in a fixed order.
+  st.peak_rss_before_merge_kb = peak_rss_kb();
   t0 = std::chrono::steady_clock::now();
   if (progress && !progress(0.0, "merge")) throw Cancelled();
   // Pieces whose outline kept them above budget leave a deficit; the others make it up from

@@ -43,6 +43,9 @@ struct MetaStats {
   std::vector<PieceReport> pieces;
   // Wall time per stage.
   double count_s = 0, values_s = 0, simplify_s = 0, merge_s = 0;
+  // Peak resident memory of the process (Linux VmHWM, kB; 0 elsewhere) just before the merge:
+  // what the pieces needed, without the kept-vertex triangulation.
+  std::size_t peak_rss_before_merge_kb = 0;
 };
 
 struct MetaResult {
@@ -55,6 +58,9 @@ struct MetaResult {
 // InputError when the DEM has no surface, IoError/InputError when a read fails.
 MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
                          const core::Progress& progress, MetaStats* stats = nullptr);
+
+// Peak resident memory of this process so far in kB (Linux VmHWM), 0 where unknown.
+std::size_t peak_rss_kb();
 
 // The piece value of the paper's CalcPieceValue on a window of heights: the mean ED/GD over
 // all pairs of `points` random points in the footprint (seeded), GD on the Steiner graph of

@@ -80,19 +80,37 @@ TEST_CASE("options ascii, vertices and quiet do what they say", "[cli]") {
   CHECK(line == "format ascii 1.0");
 }
 
-TEST_CASE("output bytes are identical for 1 and 2 threads", "[cli][determinism]") {
+TEST_CASE("output bytes are identical for 1, 2 and 4 threads", "[cli][determinism]") {
   Fixture fx;
-  std::string bytes[2];
-  for (int t = 1; t <= 2; ++t) {
-    const auto out = (fx.dir / ("t" + std::to_string(t) + ".ply")).string();
-    REQUIRE(test::run(kExe, {"--threads", std::to_string(t), fx.dem, out}).exit_code == 0);
+  const auto algo = GENERATE(as<std::string>{}, "vp", "vp-meta", "pld-meta");
+  std::string bytes[3];
+  for (int k = 0; k < 3; ++k) {
+    const std::string t = std::to_string(1 << k);
+    const auto out = (fx.dir / ("t" + t + ".ply")).string();
+    INFO(algo << ", threads " << t);
+    // --tile-mb 1: the meta engine works on several pieces at once.
+    REQUIRE(test::run(kExe, {"--algo", algo, "--tile-mb", "1", "--threads", t, fx.dem, out})
+                .exit_code == 0);
     std::ifstream in(out, std::ios::binary);
     std::ostringstream ss;
     ss << in.rdbuf();
-    bytes[t - 1] = ss.str();
+    bytes[k] = ss.str();
   }
   CHECK(bytes[0].size() > 1000);
   CHECK(bytes[0] == bytes[1]);
+  CHECK(bytes[0] == bytes[2]);
+}
+
+TEST_CASE("--verbose prints the pieces' values and budgets", "[cli][meta]") {
+  Fixture fx;
+  const auto out = (fx.dir / "out.ply").string();
+  const auto r = test::run(
+      kExe, {"--algo", "vp-meta", "--levels", "2", "--verbose", "--vertices", "100", fx.dem, out});
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.err.find("4 pieces") != std::string::npos);
+  CHECK(r.err.find("value   P2L%  budget") != std::string::npos);
+  CHECK(r.err.find("stages: count") != std::string::npos);
+  CHECK(r.err.find("-> 100 vertices") != std::string::npos);
 }
 
 TEST_CASE("bad usage exits 2 with a one-line message naming the flag, creating nothing", "[cli]") {
@@ -110,6 +128,10 @@ TEST_CASE("bad usage exits 2 with a one-line message naming the flag, creating n
        "--keep and --vertices: give one, not both"},
       {{"--algo", "qslim", fx.dem, out}, "--algo qslim: expected vp, pld, vp-meta or pld-meta"},
       {{"--threads", "0", fx.dem, out}, "--threads 0: expected an integer >= 1"},
+      {{"--levels", "17", fx.dem, out}, "--levels 17: expected an integer from 0 to 16"},
+      {{"--levels", "-1", fx.dem, out}, "--levels -1: expected an integer from 0 to 16"},
+      {{"--tile-mb", "0", fx.dem, out}, "--tile-mb 0: expected an integer >= 1"},
+      {{"--value-points", "1", fx.dem, out}, "--value-points 1: expected an integer >= 2"},
       {{"--bogus", fx.dem, out}, "--bogus: unknown option"},
       {{fx.dem}, "expected INPUT and OUTPUT"},
       {{fx.dem, fx.dem}, fx.dem + ": OUTPUT is the INPUT file"},

@@ -121,3 +121,28 @@ TEST_CASE("piece values: about 1 on a plane, lower on rough ground", "[parallel]
   const auto voids = test::make_grid(3, 3, [](int, int) { return kNaN; });
   CHECK(par::piece_value(voids, 0, 0, frame, 12, 4096, 1) == 1.0);
 }
+
+TEST_CASE("piece values on a subsampled grid track the full-resolution values",
+          "[parallel][meta]") {
+  // Hills of several wavelengths (>= 12 cells) and heights: the cheaper value (at most 1024
+  // cells, every 4th row and column of 128 x 128) stays close to the full one (16384 cells)
+  // and orders the pieces the same way.
+  core::GridFrame frame;
+  frame.metres_per_unit = 10.0;
+  std::vector<double> full, cheap;
+  for (double height : {5.0, 20.0, 60.0}) {
+    const auto g = test::make_grid(128, 128, [height](int c, int r) {
+      return height * (std::sin(c * 0.13) * std::cos(r * 0.11) + 0.5 * std::sin((c + r) * 0.05));
+    });
+    full.push_back(par::piece_value(g, 0, 0, frame, 20, 1 << 30, 3));
+    cheap.push_back(par::piece_value(g, 0, 0, frame, 20, 1024, 3));
+  }
+  for (std::size_t i = 0; i < full.size(); ++i) {
+    INFO("height " << i << ": full " << full[i] << ", subsampled " << cheap[i]);
+    CHECK(std::fabs(full[i] - cheap[i]) < 0.01);
+  }
+  CHECK(full[0] > full[1]);
+  CHECK(full[1] > full[2]);
+  CHECK(cheap[0] > cheap[1]);
+  CHECK(cheap[1] > cheap[2]);
+}

@@ -7,6 +7,7 @@
 #include "core/footprint.hpp"
 #include "core/mesh_check.hpp"
 #include "io/dem_reader.hpp"
+#include "parallel/meta.hpp"
 #include "parallel/simplify.hpp"
 #include "test_support.hpp"
 
@@ -45,6 +46,41 @@ TEST_CASE("St Helens at 10 %: exact count, counter-clockwise faces, footprint co
   CHECK(mc.bad_edges == 0);
   // The cell-centre rectangle: 127 x 127 cells of 30 m.
   CHECK(mc.area == Approx(127.0 * 30 * 127 * 30).epsilon(1e-12));
+}
+
+TEST_CASE("St Helens at 10 % with VP' and PLD': exact count, footprint covered once",
+          "[shared][meta]") {
+  GDALAllRegister();
+  const io::Dem dem = io::read_dem(test::shared_data("st_helens_crater.tif"), {}, nullptr);
+  par::MetaOptions o;
+  o.elimination.importance = GENERATE(core::Importance::vp, core::Importance::pld);
+  o.keep.percent = 10.0;
+  par::MetaStats stats;
+  const par::MetaResult r = par::simplify_meta(dem, o, nullptr, &stats);
+  CHECK(stats.pieces.size() == 16);
+  CHECK(r.tin.cells.size() == 1638);
+  test::check_tin(dem.grid, r.tin, dem.frame);
+  const core::MeshCheck mc = core::check_mesh(dem.output_xy(r.tin.cells), r.tin.faces);
+  CHECK(mc.area == Approx(127.0 * 30 * 127 * 30).epsilon(1e-12));
+}
+
+TEST_CASE("Andorra SRTM voids stay open with VP' on many small pieces", "[shared][meta]") {
+  GDALAllRegister();
+  const io::Dem dem = io::read_dem(test::shared_data("pyrenees_andorra_voids.tif"), {}, nullptr);
+  par::MetaOptions o;
+  o.keep.percent = 10.0;
+  o.levels = 6;
+  o.tile_bytes = 1 << 20;
+  par::MetaStats stats;
+  const par::MetaResult r = par::simplify_meta(dem, o, nullptr, &stats);
+  CHECK(stats.pieces.size() >= 64);
+  CHECK(r.tin.cells.size() == 1566);  // round(0.1 x 15658), outline floors made up elsewhere
+  CHECK(core::faces_over_nodata(dem.grid, test::grid_xy(dem.grid, r.tin), r.tin.faces) == 0);
+  const core::MeshCheck mc = core::check_mesh(dem.output_xy(r.tin.cells), r.tin.faces);
+  CHECK(mc.clockwise_or_flat == 0);
+  CHECK(mc.bad_edges == 0);
+  // In the frame (exact) the faces cover the footprint once.
+  test::check_tin(dem.grid, r.tin, dem.frame);
 }
 
 TEST_CASE("Andorra SRTM voids stay open and the output is in UTM metres", "[shared][simplify]") {
