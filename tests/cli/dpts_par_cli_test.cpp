@@ -101,7 +101,7 @@ TEST_CASE("output bytes are identical for 1, 2 and 4 threads", "[cli][determinis
   CHECK(bytes[0] == bytes[2]);
 }
 
-TEST_CASE("--verbose prints the pieces' values and budgets", "[cli][meta]") {
+TEST_CASE("dpts-par --verbose prints the pieces' values and budgets", "[cli][meta]") {
   Fixture fx;
   const auto out = (fx.dir / "out.ply").string();
   const auto r = test::run(
