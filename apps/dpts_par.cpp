@@ -141,9 +141,10 @@ int run_meta(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer
     }
     std::fprintf(stderr,
                  "dpts-par: pieces: longest %.3f s, mean %.3f s (read + simplify); peak memory "
-                 "before the merge %.1f MB\n",
+                 "before the merge %.1f MB, of which kept vertices %.1f MB\n",
                  longest, sum / static_cast<double>(std::max<std::size_t>(1, stats.pieces.size())),
-                 static_cast<double>(stats.peak_rss_before_merge_kb) / 1024.0);
+                 static_cast<double>(stats.peak_rss_before_merge_kb) / 1024.0,
+                 static_cast<double>(stats.kept_bytes) / (1 << 20));
     std::fprintf(stderr,
                  "dpts-par: stages: count %.2f s, values %.2f s, simplify %.2f s, merge %.2f s\n",
                  stats.count_s, stats.values_s, stats.simplify_s, stats.merge_s);

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Scaling of the piece engine: runs dpts-par --algo vp-meta (or the --algo given) on DEM at
 # --threads 1, 2, 4, ... up to the core count (or MAX_THREADS), RUNS times each, and prints CSV:
-#   threads,run,wall_s,peak_rss_kb,rss_before_merge_kb,sha256,count_s,values_s,simplify_s,
+#   threads,run,wall_s,peak_rss_kb,rss_before_merge_kb,kept_kb,sha256,count_s,values_s,simplify_s,
 #   merge_s,write_s,pieces,longest_piece_s,mean_piece_s
 # then, per thread count, the median wall time, the speedup over 1 thread, and the critical
 # path bound (longest piece against the mean: the speedup no core count can beat on the
@@ -20,7 +20,7 @@ trap 'rm -rf "$tmp"' EXIT
 threads=()
 for ((t = 1; t < max; t *= 2)); do threads+=("$t"); done
 threads+=("$max")
-echo "threads,run,wall_s,peak_rss_kb,rss_before_merge_kb,sha256,count_s,values_s,simplify_s,merge_s,write_s,pieces,longest_piece_s,mean_piece_s"
+echo "threads,run,wall_s,peak_rss_kb,rss_before_merge_kb,kept_kb,sha256,count_s,values_s,simplify_s,merge_s,write_s,pieces,longest_piece_s,mean_piece_s"
 for ((run = 1; run <= runs; ++run)); do
   for t in "${threads[@]}"; do
     /usr/bin/time -f "%e %M" -o "$tmp/time" "$root/build/dpts-par" --verbose --threads "$t" \
@@ -31,16 +31,17 @@ for ((run = 1; run <= runs; ++run)); do
       /stages: count/ { gsub(",", ""); count = $4; values = $7; simplify = $10; merge = $13 }
       /stages: write/ { write = $4 }
       /pieces \(blocks/ { pieces = $2 }
-      /pieces: longest/ { gsub(",", ""); longest = $4; mean = $7; before = $(NF - 1) * 1024 }
-      END { printf "%s,%s,%s,%s,%.0f,%s,%s,%s,%s,%s,%s,%s,%s,%s\n", t, run, wall, rss, before,
-            hash, count, values, simplify, merge, write, pieces, longest, mean }' "$tmp/log"
+      /pieces: longest/ { gsub(",", ""); longest = $4; mean = $7; kept = $(NF - 1) * 1024
+                          for (i = 1; i < NF; ++i) if ($i == "merge") before = $(i + 1) * 1024 }
+      END { printf "%s,%s,%s,%s,%.0f,%.0f,%s,%s,%s,%s,%s,%s,%s,%s,%s\n", t, run, wall, rss, before,
+            kept, hash, count, values, simplify, merge, write, pieces, longest, mean }' "$tmp/log"
   done
 done | tee "$tmp/csv"
 # Medians per thread count (sorted numerically by hand: mawk has no asort).
 for t in "${threads[@]}"; do
   med=$(awk -F, -v t="$t" '$1 == t { print $3 }' "$tmp/csv" | sort -n |
     awk '{ a[NR] = $1 } END { print a[int((NR + 1) / 2)] }')
-  awk -F, -v t="$t" -v med="$med" '$1 == t { p = $12; l += $13; m += $14; n++ }
+  awk -F, -v t="$t" -v med="$med" '$1 == t { p = $13; l += $14; m += $15; n++ }
     END { printf "%s %s %d %.4f %.4f\n", t, med, p, l / n, m / n }' "$tmp/csv"
 done | awk '
   NR == 1 { base = $2 }

@@ -84,6 +84,7 @@ struct Eliminator::Impl {
   std::vector<std::uint32_t> evaluations;  // per-vertex counter, seeds Monte Carlo VP
   IndexedMinHeap heap;
   bool heap_ready = false;
+  std::uint32_t removals = 0;  // removals so far, all eliminate() calls together
   Delaunay dt;
   std::size_t alive = 0;
 
@@ -195,35 +196,10 @@ struct Eliminator::Impl {
            row - row_r >= box.row_lo + margin && row + row_r <= box.row_hi - margin;
   }
 
-  // v's removal for the log: on the outline, the ends of the inside run of faces round it.
-  Removal removal(VertexHandle v) const {
-    Removal r;
-    r.cell = cells[v->info().id];
-    std::vector<VertexHandle> ring;
-    std::vector<char> inside;
-    auto fc = dt.incident_faces(v);
-    const auto done = fc;
-    do {
-      ring.push_back(fc->vertex(Delaunay::ccw(fc->index(v))));
-      inside.push_back(!dt.is_infinite(fc) && fc->info().inside == 1);
-    } while (++fc != done);
-    const std::size_t n = ring.size();
-    for (std::size_t j = 0; j < n; ++j) {
-      if (!inside[j] || inside[(j + n - 1) % n]) continue;
-      std::size_t k = j;
-      while (inside[k]) k = (k + 1) % n;
-      r.outline = true;
-      r.next = cells[ring[j]->info().id];
-      r.prev = cells[ring[k]->info().id];
-      break;
-    }
-    return r;
-  }
-
-  // Importance of v, or kLocked when v must stay (a corner or bend of the outline, or an
-  // outline vertex whose removal would change the footprint). With relabel_mark != 0, first
-  // relabels the incident faces whose three corners carry that stamp (new faces of a hole).
-  double evaluate(VertexHandle v, Scratch& s, std::uint32_t relabel_mark = 0) {
+  // The link of v, counter-clockwise, into s.ring, and in s.inside whether each face
+  // v -> ring[j] -> ring[j+1] is in the footprint. With relabel_mark != 0, first relabels the
+  // incident faces whose three corners carry that stamp (new faces of a hole).
+  void read_ring(VertexHandle v, Scratch& s, std::uint32_t relabel_mark) {
     s.ring.clear();
     s.inside.clear();
     auto fc = dt.incident_faces(v);
@@ -238,6 +214,45 @@ struct Eliminator::Impl {
       s.ring.push_back(fc->vertex(Delaunay::ccw(i)));
       s.inside.push_back(!dt.is_infinite(fc) && fc->info().inside == 1);
     } while (++fc != done);
+  }
+
+  // Number of runs of inside faces round the ring (0 when all or none are inside), and the
+  // first face of the last run.
+  static std::size_t inside_runs(const Scratch& s, std::size_t& first) {
+    const std::size_t n = s.ring.size();
+    std::size_t runs = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+      if (s.inside[j] && !s.inside[(j + n - 1) % n]) ++runs, first = j;
+    }
+    return runs;
+  }
+
+  // The end of the inside run starting at `first`: the ring index after its last face.
+  static std::size_t run_end(const Scratch& s, std::size_t first) {
+    std::size_t j = first;
+    while (s.inside[j]) j = (j + 1) % s.ring.size();
+    return j;
+  }
+
+  // v's removal for the log: on the outline, the ends of the inside run of faces round it.
+  Removal removal(VertexHandle v, Scratch& s) {
+    Removal r;
+    r.cell = cells[v->info().id];
+    read_ring(v, s, 0);
+    std::size_t first = 0;
+    if (inside_runs(s, first) > 0) {
+      r.outline = true;
+      r.next = cells[s.ring[first]->info().id];
+      r.prev = cells[s.ring[run_end(s, first)]->info().id];
+    }
+    return r;
+  }
+
+  // Importance of v, or kLocked when v must stay (a corner or bend of the outline, or an
+  // outline vertex whose removal would change the footprint). With relabel_mark != 0, first
+  // relabels the incident faces whose three corners carry that stamp (new faces of a hole).
+  double evaluate(VertexHandle v, Scratch& s, std::uint32_t relabel_mark = 0) {
+    read_ring(v, s, relabel_mark);
     const std::size_t n = s.ring.size();
     if (!options.pinned.empty() && options.pinned[cells[v->info().id]]) return kLocked;
     const std::size_t n_inside =
@@ -249,18 +264,11 @@ struct Eliminator::Impl {
     if (closed) {
       s.poly.assign(s.ring.begin(), s.ring.end());
     } else {
-      std::size_t runs = 0;
-      for (std::size_t j = 0; j < n; ++j) {
-        if (s.inside[j] && !s.inside[(j + n - 1) % n]) ++runs, first = j;
-      }
-      if (runs != 1) return kLocked;  // the footprint pinches at v
+      if (inside_runs(s, first) != 1) return kLocked;  // the footprint pinches at v
       s.poly.clear();
-      std::size_t j = first;
-      while (s.inside[j]) {
-        s.poly.push_back(s.ring[j]);
-        j = (j + 1) % n;
-      }
-      s.poly.push_back(s.ring[j]);
+      const std::size_t end = run_end(s, first);
+      for (std::size_t j = first; j != end; j = (j + 1) % n) s.poly.push_back(s.ring[j]);
+      s.poly.push_back(s.ring[end]);
       // The outline runs a -> v -> b; it must be straight (in grid space) through v.
       const VertexInfo &a = s.poly.front()->info(), &b = s.poly.back()->info(), &c = v->info();
       const std::int64_t ax = a.col - c.col, ay = a.row - c.row;
@@ -372,7 +380,7 @@ void Eliminator::eliminate(std::size_t keep, const Progress& progress, std::vect
   while (m.alive > keep && !m.heap.empty()) {
     const std::uint32_t id = m.heap.pop();
     const VertexHandle v = m.handle[id];
-    if (log) log->push_back(m.removal(v));
+    if (log) log->push_back(m.removal(v, scratch));
     link.clear();
     auto vc = m.dt.incident_vertices(v);
     const auto done = vc;
@@ -384,7 +392,7 @@ void Eliminator::eliminate(std::size_t keep, const Progress& progress, std::vect
     --m.alive;
     // The new faces fill the hole, so all their corners are in the link. note: remove() may
     // reuse the memory of old faces for new ones, so their labels are stale, not unset.
-    const std::uint32_t mark = static_cast<std::uint32_t>(removed + 1);
+    const std::uint32_t mark = ++m.removals;  // over all calls: marks never repeat
     for (const VertexHandle& u : link) u->info().stamp = mark;
     for (const VertexHandle& u : link) {
       // note: evaluating u relabels the new faces round u before reading their labels, and

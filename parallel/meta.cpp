@@ -215,6 +215,12 @@ PieceOutput simplify_piece(const io::DemInfo& dem, const core::Piece& p, std::si
     r.prev = global(r.prev);
     r.next = global(r.next);
   }
+  // The outputs of all pieces are held until the merge: no spare capacity.
+  out.cells.shrink_to_fit();
+  out.z.shrink_to_fit();
+  out.outline.shrink_to_fit();
+  out.tail.shrink_to_fit();
+  out.tail_z.shrink_to_fit();
   report.simplify_s = seconds_since(t0);
   return out;
 }
@@ -369,6 +375,12 @@ MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
 
   // 5. Merge: one Delaunay triangulation of all kept vertices, in a fixed order.
   st.peak_rss_before_merge_kb = peak_rss_kb();
+  for (const auto& o : outputs) {
+    st.kept_bytes += o.cells.capacity() * sizeof(std::uint32_t) + o.z.capacity() * sizeof(double) +
+                     o.outline.capacity() * sizeof(core::OutlineEdge) +
+                     o.tail.capacity() * sizeof(core::Removal) +
+                     o.tail_z.capacity() * sizeof(double);
+  }
   t0 = std::chrono::steady_clock::now();
   if (progress && !progress(0.0, "merge")) throw Cancelled();
   // Pieces whose outline kept them above budget leave a deficit; the others make it up from

@@ -46,6 +46,9 @@ struct MetaStats {
   // Peak resident memory of the process (Linux VmHWM, kB; 0 elsewhere) just before the merge:
   // what the pieces needed, without the kept-vertex triangulation.
   std::size_t peak_rss_before_merge_kb = 0;
+  // Bytes the pieces' kept vertices, outline edges and tails took at that point: the whole-DEM
+  // state, which grows with the kept count (the rest is bounded by the pieces in flight).
+  std::size_t kept_bytes = 0;
 };
 
 struct MetaResult {
