@@ -22,7 +22,9 @@ Simplifies a DEM (band 1 of any raster GDAL reads) into a TIN that preserves sur
                        removal (default); pld: preserve local distances; vp-meta, pld-meta:
                        the paper's VP' and PLD' (k-d pieces, per-piece budgets from the
                        pieces' mean ED/GD), run out of core: pieces are read, simplified
-                       and freed concurrently, and only the kept vertices are merged
+                       and freed concurrently, and only the kept vertices are merged;
+                       qslim: Garland-Heckbert quadric edge collapse (the paper's
+                       competitor) with the outline locked and no folds
   --levels C           vp-meta/pld-meta: at least 2^C pieces (default 4)
   --value-points L     vp-meta/pld-meta: random points per piece value (default 20)
   --verbose            vp-meta/pld-meta: print every piece's value and budget, and times
@@ -78,12 +80,13 @@ ParOptions parse_par(const std::vector<std::string>& args) {
     } else if (arg == "--algo") {
       const std::string v = need(arg);
       o.meta = v == "vp-meta" || v == "pld-meta";
-      if (v == "vp" || v == "vp-meta") {
+      o.qslim = v == "qslim";
+      if (v == "vp" || v == "vp-meta" || v == "qslim") {
         o.elimination.importance = core::Importance::vp;
       } else if (v == "pld" || v == "pld-meta") {
         o.elimination.importance = core::Importance::pld;
       } else {
-        throw UsageError("--algo " + v + ": expected vp, pld, vp-meta or pld-meta");
+        throw UsageError("--algo " + v + ": expected vp, pld, vp-meta, pld-meta or qslim");
       }
       o.algo_text = v;
     } else if (arg == "--levels") {

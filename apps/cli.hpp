@@ -21,7 +21,9 @@ struct ParOptions {
   par::KeepTarget keep;
   std::string keep_text = "10%";
   std::string algo_text = "vp";
-  bool meta = false;  // --algo vp-meta | pld-meta: the piece engine (PLD'/VP')
+  bool meta = false;
+  bool qslim = false;  // --algo qslim: the paper's competitor  // --algo vp-meta | pld-meta: the
+                       // piece engine (PLD'/VP')
   int levels = 4;
   int value_points = 20;
   bool verbose = false;

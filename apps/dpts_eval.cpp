@@ -143,19 +143,7 @@ int run(const Options& o) {
   const io::Dem dem = io::read_dem(o.dem, io::DemReadOptions{o.t_srs}, nullptr);
 
   // T: the DEM's full-resolution grid TIN, in the output CRS dpts-par uses.
-  const core::GridTin grid = core::grid_tin(dem.grid);
-  if (grid.faces.empty()) throw InputError(o.dem + ": no three neighbouring valid cells");
-  core::TriMesh t;
-  {
-    const auto xy = dem.output_xy(grid.cells);
-    t.xyz.resize(3 * grid.cells.size());
-    for (std::size_t i = 0; i < grid.cells.size(); ++i) {
-      t.xyz[3 * i] = xy[2 * i], t.xyz[3 * i + 1] = xy[2 * i + 1],
-                t.xyz[3 * i + 2] = dem.grid.z[grid.cells[i]];
-    }
-    t.faces = grid.faces;
-    core::fix_orientation(t);
-  }
+  const core::TriMesh t = dem.grid_mesh();
   // T': the mesh.
   io::Mesh ply = io::read_ply_file(o.mesh);
   if (ply.faces.empty()) throw InputError(o.mesh + ": has no faces");

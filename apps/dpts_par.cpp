@@ -15,6 +15,8 @@
 #include "apps/cli.hpp"
 #include "core/errors.hpp"
 #include "core/mesh_check.hpp"
+#include "core/qslim.hpp"
+#include "core/surface_sampling.hpp"
 #include "io/atomic_output_file.hpp"
 #include "io/dem_reader.hpp"
 #include "io/ply.hpp"
@@ -60,21 +62,13 @@ void summary(const dpts::cli::ParOptions& o, std::size_t in, std::size_t kept, s
 }
 
 // Writes the TIN (cells of the DEM's raster, their heights) as PLY in the output CRS.
-void write_output(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem, dpts::core::Tin tin,
-                  const std::vector<double>& z, dpts::io::AtomicOutputFile& out) {
+// Writes a mesh (x, y in the output CRS) as PLY, refusing one with folded faces.
+void write_mesh(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem, dpts::io::Mesh mesh,
+                dpts::io::AtomicOutputFile& out) {
   using namespace dpts;
-  io::Mesh mesh;
-  const std::vector<double> xy = dem.output_xy(tin.cells);
-  mesh.xyz.resize(3 * tin.cells.size());
-  for (std::size_t i = 0; i < tin.cells.size(); ++i) {
-    mesh.xyz[3 * i] = xy[2 * i];
-    mesh.xyz[3 * i + 1] = xy[2 * i + 1];
-    mesh.xyz[3 * i + 2] = z[i];
-  }
-  mesh.faces = std::move(tin.faces);
   // note: the TIN is built in a local affine frame; a projection far from affine could fold
   // a sliver in the output CRS. Refuse to write such a mesh rather than hide it.
-  const core::MeshCheck check = core::check_mesh(xy, mesh.faces);
+  const core::MeshCheck check = core::check_mesh(core::xy_of(mesh.xyz), mesh.faces);
   if (check.clockwise_or_flat != 0) {
     throw std::runtime_error(o.output + ": " + std::to_string(check.clockwise_or_flat) +
                              " faces would fold over in " + dem.output_crs_name);
@@ -92,6 +86,78 @@ void write_output(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem, 
                 o.ascii ? io::PlyFormat::ascii : io::PlyFormat::binary_little_endian);
   if (g_cancel) throw Cancelled();
   out.commit();
+}
+
+// Writes the TIN (cells of the DEM's raster, their heights) as PLY in the output CRS.
+void write_output(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem, dpts::core::Tin tin,
+                  const std::vector<double>& z, dpts::io::AtomicOutputFile& out) {
+  dpts::io::Mesh mesh;
+  const std::vector<double> xy = dem.output_xy(tin.cells);
+  mesh.xyz.resize(3 * tin.cells.size());
+  for (std::size_t i = 0; i < tin.cells.size(); ++i) {
+    mesh.xyz[3 * i] = xy[2 * i];
+    mesh.xyz[3 * i + 1] = xy[2 * i + 1];
+    mesh.xyz[3 * i + 2] = z[i];
+  }
+  mesh.faces = std::move(tin.faces);
+  write_mesh(o, dem, std::move(mesh), out);
+}
+
+// QSlim (the paper's competitor): Garland-Heckbert edge collapse of the grid TIN, in memory.
+int run_qslim(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer,
+              const dpts::core::Progress& progress, std::chrono::steady_clock::time_point start) {
+  using namespace dpts;
+  io::Dem dem = io::read_dem(o.input, io::DemReadOptions{o.t_srs}, progress);
+  print_notes(dem, o);
+  io::AtomicOutputFile out(o.output);
+  if (!progress(0.0, "qslim")) throw Cancelled();
+  // In the frame (u, w; heights in frame units): collinear cells stay exactly collinear there,
+  // so the fold test sees flat slivers along the outline of a reprojected DEM as flat.
+  const core::GridTin tin = core::grid_tin(dem.grid);
+  if (tin.faces.empty()) throw InputError(o.input + ": no three neighbouring valid cells");
+  const double unit = dem.frame.metres_per_unit;
+  core::TriMesh grid;
+  for (std::uint32_t cell : tin.cells) {
+    const int c = static_cast<int>(cell % static_cast<std::uint32_t>(dem.width));
+    const int r = static_cast<int>(cell / static_cast<std::uint32_t>(dem.width));
+    grid.xyz.insert(grid.xyz.end(),
+                    {dem.frame.u(c, r), dem.frame.w(c, r), dem.grid.z[cell] / unit});
+  }
+  grid.faces = tin.faces;
+  core::fix_orientation(grid);
+  const std::size_t input = grid.vertex_count();
+  const std::size_t target = par::target_count(o.keep, input);
+  core::QslimStats stats;
+  const core::TriMesh result = core::qslim(grid, target, &stats);
+  if (!progress(1.0, "qslim")) throw Cancelled();
+  printer.finish();
+  warn_kept(stats.kept_vertices, target);
+  if (o.verbose) {
+    std::fprintf(stderr, "dpts-par: qslim: %zu collapses refused (fold or border)\n",
+                 stats.rejected_folds);
+  }
+  // Back to grid positions (the frame is linear), then to the output CRS.
+  const auto& m = dem.frame.m;
+  const double det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+  std::vector<double> grid_xy(2 * result.vertex_count());
+  for (std::size_t v = 0; v < result.vertex_count(); ++v) {
+    const double u = result.xyz[3 * v], w = result.xyz[3 * v + 1];
+    grid_xy[2 * v] = (m[1][1] * u - m[0][1] * w) / det;
+    grid_xy[2 * v + 1] = (-m[1][0] * u + m[0][0] * w) / det;
+  }
+  const std::vector<double> xy = dem.output_xy_of_grid(grid_xy);
+  const std::size_t faces = result.faces.size();
+  io::Mesh mesh;
+  mesh.xyz.resize(3 * result.vertex_count());
+  for (std::size_t v = 0; v < result.vertex_count(); ++v) {
+    mesh.xyz[3 * v] = xy[2 * v];
+    mesh.xyz[3 * v + 1] = xy[2 * v + 1];
+    mesh.xyz[3 * v + 2] = result.xyz[3 * v + 2] * unit;
+  }
+  mesh.faces = result.faces;
+  write_mesh(o, dem, std::move(mesh), out);
+  summary(o, input, stats.kept_vertices, faces, start);
+  return 0;
 }
 
 bool g_user_cache = false;  // GDAL_CACHEMAX came from the environment
@@ -184,6 +250,7 @@ int run(const dpts::cli::ParOptions& o) {
   const core::Progress progress = [&](double f, std::string_view s) { return printer(f, s); };
 
   if (o.meta) return run_meta(o, printer, progress, start);
+  if (o.qslim) return run_qslim(o, printer, progress, start);
   io::Dem dem = io::read_dem(o.input, io::DemReadOptions{o.t_srs}, progress);
   print_notes(dem, o);
   // The input is valid: now claim the output (fails early when it cannot be written).

@@ -15,6 +15,7 @@
 #include <mutex>
 
 #include "core/errors.hpp"
+#include "core/surface_sampling.hpp"
 
 namespace dpts::io {
 namespace {
@@ -62,24 +63,33 @@ void TransformDeleter::operator()(OGRCoordinateTransformation* t) const {
 }
 
 std::vector<double> DemInfo::output_xy(const std::vector<std::uint32_t>& cells) const {
-  const double* gt = geotransform;
-  std::vector<double> x(cells.size()), y(cells.size());
+  std::vector<double> grid(2 * cells.size());
   for (std::size_t i = 0; i < cells.size(); ++i) {
-    const double c = cells[i] % width + 0.5, r = cells[i] / width + 0.5;
+    grid[2 * i] = static_cast<double>(cells[i] % static_cast<std::uint32_t>(width));
+    grid[2 * i + 1] = static_cast<double>(cells[i] / static_cast<std::uint32_t>(width));
+  }
+  return output_xy_of_grid(grid);
+}
+
+std::vector<double> DemInfo::output_xy_of_grid(const std::vector<double>& grid) const {
+  const double* gt = geotransform;
+  const std::size_t n = grid.size() / 2;
+  std::vector<double> x(n), y(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double c = grid[2 * i] + 0.5, r = grid[2 * i + 1] + 0.5;
     x[i] = gt[0] + c * gt[1] + r * gt[2];
     y[i] = gt[3] + c * gt[4] + r * gt[5];
   }
-  if (to_output) {
-    std::vector<int> ok(cells.size(), 0);
-    if (!to_output->Transform(static_cast<int>(cells.size()), x.data(), y.data(), nullptr,
-                              ok.data()) ||
+  if (to_output && n > 0) {
+    std::vector<int> ok(n, 0);
+    if (!to_output->Transform(static_cast<int>(n), x.data(), y.data(), nullptr, ok.data()) ||
         std::find(ok.begin(), ok.end(), 0) != ok.end()) {
       throw IoError(path + ": cannot transform cell centres to " + output_crs_name + " (" +
                     last_gdal_error() + ")");
     }
   }
-  std::vector<double> xy(2 * cells.size());
-  for (std::size_t i = 0; i < cells.size(); ++i) xy[2 * i] = x[i], xy[2 * i + 1] = y[i];
+  std::vector<double> xy(2 * n);
+  for (std::size_t i = 0; i < n; ++i) xy[2 * i] = x[i], xy[2 * i + 1] = y[i];
   return xy;
 }
 
@@ -330,6 +340,22 @@ core::HeightGrid WindowReader::read(int col0, int row0, int width, int height,
     if (is_nodata || !std::isfinite(z)) z = nan;
   }
   return grid;
+}
+
+core::TriMesh Dem::grid_mesh() const {
+  const core::GridTin tin = core::grid_tin(grid);
+  if (tin.faces.empty()) throw InputError(path + ": no three neighbouring valid cells");
+  core::TriMesh mesh;
+  const auto xy = output_xy(tin.cells);
+  mesh.xyz.resize(3 * tin.cells.size());
+  for (std::size_t i = 0; i < tin.cells.size(); ++i) {
+    mesh.xyz[3 * i] = xy[2 * i];
+    mesh.xyz[3 * i + 1] = xy[2 * i + 1];
+    mesh.xyz[3 * i + 2] = grid.z[tin.cells[i]];
+  }
+  mesh.faces = tin.faces;
+  core::fix_orientation(mesh);
+  return mesh;
 }
 
 Dem read_dem(const std::string& path, const DemReadOptions& options,

@@ -9,6 +9,7 @@
 
 #include "core/elimination.hpp"
 #include "core/grid.hpp"
+#include "core/steiner_graph.hpp"
 
 class OGRCoordinateTransformation;
 
@@ -48,6 +49,9 @@ struct DemInfo {
   // Throws IoError if the CRS transformation fails. Not thread-safe (one transformation).
   std::vector<double> output_xy(const std::vector<std::uint32_t>& cells) const;
 
+  // The same for any grid positions (col, row; cell centres at integers): x0, y0, ...
+  std::vector<double> output_xy_of_grid(const std::vector<double>& grid_xy) const;
+
   // Grid positions (col, row; cell centres at integers) of points given in the output CRS:
   // the inverse of output_xy. Throws IoError if the CRS transformation fails.
   std::vector<double> grid_xy(const std::vector<double>& output_xy) const;
@@ -70,6 +74,11 @@ struct DemInfo {
 struct Dem : DemInfo {
   core::HeightGrid grid;
   std::size_t valid_cells = 0;
+
+  // The DEM's full-resolution grid TIN (core::grid_tin: the TIN the elimination starts from)
+  // in the output CRS, faces counter-clockwise; vertices in surface-cell order. Throws
+  // InputError when the DEM has no face.
+  core::TriMesh grid_mesh() const;
 };
 
 // Opens band 1 of `path` and checks it without reading heights: throws InputError naming the

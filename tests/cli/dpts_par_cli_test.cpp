@@ -82,7 +82,7 @@ TEST_CASE("options ascii, vertices and quiet do what they say", "[cli]") {
 
 TEST_CASE("output bytes are identical for 1, 2 and 4 threads", "[cli][determinism]") {
   Fixture fx;
-  const auto algo = GENERATE(as<std::string>{}, "vp", "vp-meta", "pld-meta");
+  const auto algo = GENERATE(as<std::string>{}, "vp", "vp-meta", "pld-meta", "qslim");
   std::string bytes[3];
   for (int k = 0; k < 3; ++k) {
     const std::string t = std::to_string(1 << k);
@@ -126,7 +126,7 @@ TEST_CASE("bad usage exits 2 with a one-line message naming the flag, creating n
       {{"--vertices", "2", fx.dem, out}, "--vertices 2: expected an integer >= 3"},
       {{"--keep", "10%", "--vertices", "50", fx.dem, out},
        "--keep and --vertices: give one, not both"},
-      {{"--algo", "qslim", fx.dem, out}, "--algo qslim: expected vp, pld, vp-meta or pld-meta"},
+      {{"--algo", "qem", fx.dem, out}, "--algo qem: expected vp, pld, vp-meta, pld-meta or qslim"},
       {{"--threads", "0", fx.dem, out}, "--threads 0: expected an integer >= 1"},
       {{"--levels", "17", fx.dem, out}, "--levels 17: expected an integer from 0 to 16"},
       {{"--levels", "-1", fx.dem, out}, "--levels -1: expected an integer from 0 to 16"},

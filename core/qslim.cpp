@@ -1,0 +1,122 @@
+// QSlim baseline: CGAL Garland-Heckbert edge collapse with a locked border and no folds.
+#include "core/qslim.hpp"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Constrained_placement.h>
+#include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/GarlandHeckbert_plane_policies.h>
+#include <CGAL/Surface_mesh_simplification/edge_collapse.h>
+
+#include <stdexcept>
+#include <vector>
+
+namespace dpts::core {
+namespace {
+
+namespace SMS = CGAL::Surface_mesh_simplification;
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Mesh = CGAL::Surface_mesh<K::Point_3>;
+using VertexIndex = Mesh::Vertex_index;
+
+// Border edges are constrained: never collapsed, and Constrained_placement keeps a border
+// vertex where it is when its neighbour collapses onto it.
+struct BorderMap {
+  using key_type = Mesh::Edge_index;
+  using value_type = bool;
+  using reference = bool;
+  using category = boost::readable_property_map_tag;
+  const Mesh* mesh = nullptr;
+  friend bool get(const BorderMap& m, key_type e) { return m.mesh->is_border(e); }
+};
+
+// Stops at an exact vertex count.
+struct VertexCountStop {
+  const Mesh* mesh;
+  std::size_t keep;
+  template <typename F, typename Profile>
+  bool operator()(const F&, const Profile&, std::size_t, std::size_t) const {
+    return mesh->number_of_vertices() <= keep;
+  }
+};
+
+// Rejects a collapse after which a triangle of the star would not be strictly
+// counter-clockwise seen from above (a fold, or a sliver flat in x, y), and one that would
+// move a border vertex (both ends on the border, joined by an interior edge).
+struct NoFoldFilter {
+  const Mesh* mesh;
+  std::size_t* rejected;
+  template <typename Profile>
+  boost::optional<typename Profile::Point> operator()(
+      const Profile& profile, boost::optional<typename Profile::Point> placement) const {
+    if (!placement) return placement;
+    if (mesh->is_border(profile.v0(), false) && mesh->is_border(profile.v1(), false)) {
+      ++*rejected;
+      return boost::none;
+    }
+    const auto& vpm = profile.vertex_point_map();
+    const auto& triangles = profile.triangles();
+    auto it = triangles.begin();
+    // The first triangles are the edge's own faces, which the collapse removes.
+    if (profile.left_face_exists()) ++it;
+    if (profile.right_face_exists()) ++it;
+    const K::Point_3& q = *placement;
+    for (; it != triangles.end(); ++it) {
+      // The second corner is the one that moves to the placement.
+      const K::Point_3& p = get(vpm, it->v0);
+      const K::Point_3& r = get(vpm, it->v2);
+      if (CGAL::orientation(K::Point_2(p.x(), p.y()), K::Point_2(q.x(), q.y()),
+                            K::Point_2(r.x(), r.y())) != CGAL::LEFT_TURN) {
+        ++*rejected;
+        return boost::none;
+      }
+    }
+    return placement;
+  }
+};
+
+}  // namespace
+
+TriMesh qslim(const TriMesh& in, std::size_t keep, QslimStats* stats) {
+  Mesh mesh;
+  std::vector<VertexIndex> vi;
+  vi.reserve(in.vertex_count());
+  for (std::size_t v = 0; v < in.vertex_count(); ++v) {
+    vi.push_back(mesh.add_vertex(K::Point_3(in.xyz[3 * v], in.xyz[3 * v + 1], in.xyz[3 * v + 2])));
+  }
+  for (const auto& f : in.faces) {
+    if (mesh.add_face(vi[f[0]], vi[f[1]], vi[f[2]]) == Mesh::null_face()) {
+      throw std::invalid_argument("qslim: the mesh is not a manifold surface");
+    }
+  }
+  QslimStats local;
+  QslimStats& st = stats ? *stats : local;
+  st.input_vertices = mesh.number_of_vertices();
+  using Policies = SMS::GarlandHeckbert_plane_policies<Mesh, K>;
+  Policies policies(mesh);
+  const BorderMap border{&mesh};
+  const SMS::Constrained_placement<Policies::Get_placement, BorderMap> placement(
+      border, policies.get_placement());
+  SMS::edge_collapse(mesh, VertexCountStop{&mesh, keep},
+                     CGAL::parameters::get_cost(policies.get_cost())
+                         .get_placement(placement)
+                         .edge_is_constrained_map(border)
+                         .filter(NoFoldFilter{&mesh, &st.rejected_folds}));
+  mesh.collect_garbage();
+  TriMesh out;
+  for (VertexIndex v : mesh.vertices()) {
+    const K::Point_3& p = mesh.point(v);
+    out.xyz.insert(out.xyz.end(), {p.x(), p.y(), p.z()});
+  }
+  for (Mesh::Face_index f : mesh.faces()) {
+    std::array<std::uint32_t, 3> t{};
+    int k = 0;
+    for (VertexIndex v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) {
+      t[k++] = static_cast<std::uint32_t>(v.idx());
+    }
+    out.faces.push_back(t);
+  }
+  st.kept_vertices = out.vertex_count();
+  return out;
+}
+
+}  // namespace dpts::core

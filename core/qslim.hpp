@@ -1,0 +1,29 @@
+// The paper's reference competitor, QSlim (Garland and Heckbert's quadric edge collapse), via
+// CGAL's Surface_mesh_simplification with the Garland-Heckbert plane policies, adapted so that
+// it can be compared with the elimination methods on a DEM:
+//   - the outline of the valid footprint (the mesh border, voids included) is locked: border
+//     edges are never collapsed and a collapse never moves a border vertex, so the footprint
+//     does not shrink;
+//   - a collapse that would fold a triangle over (or flatten it) seen from above is rejected,
+//     so the result stays a height field;
+//   - it stops at an exact vertex count.
+// Unlike elimination, QSlim places each merged vertex at its quadric's optimum: the output
+// vertices are not a subset of the DEM's cells.
+#pragma once
+
+#include <cstddef>
+
+#include "core/steiner_graph.hpp"
+
+namespace dpts::core {
+
+struct QslimStats {
+  std::size_t input_vertices = 0, kept_vertices = 0;
+  std::size_t rejected_folds = 0;  // collapses refused because a triangle would fold
+};
+
+// Simplifies a triangle mesh (counter-clockwise faces seen from above, in metres) to `keep`
+// vertices, or as few as the locked border and the fold rule allow. Returns the new mesh.
+TriMesh qslim(const TriMesh& mesh, std::size_t keep, QslimStats* stats = nullptr);
+
+}  // namespace dpts::core
