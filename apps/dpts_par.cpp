@@ -113,7 +113,7 @@ int run_qslim(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printe
   if (!progress(0.0, "qslim")) throw Cancelled();
   // In the frame (u, w; heights in frame units): collinear cells stay exactly collinear there,
   // so the fold test sees flat slivers along the outline of a reprojected DEM as flat.
-  const core::GridTin tin = core::grid_tin(dem.grid);
+  const core::GridTin tin = core::grid_tin(dem.grid, core::delaunay_diagonal(dem.frame));
   if (tin.faces.empty()) throw InputError(o.input + ": no three neighbouring valid cells");
   const double unit = dem.frame.metres_per_unit;
   core::TriMesh grid;

@@ -39,7 +39,15 @@ double closest_on_segment(const double* p, const double* a, const double* b, dou
 
 }  // namespace
 
-GridTin grid_tin(const HeightGrid& g) {
+Diagonal delaunay_diagonal(const GridFrame& f) {
+  // Every square maps to the same parallelogram; Delaunay takes its shorter diagonal (the
+  // angles facing the longer one are obtuse), and on a tie CGAL's perturbation takes NW-SE.
+  const double nw_u = f.u(1, 1), nw_w = f.w(1, 1), ne_u = f.u(-1, 1), ne_w = f.w(-1, 1);
+  return ne_u * ne_u + ne_w * ne_w < nw_u * nw_u + nw_w * nw_w ? Diagonal::ne_sw
+                                                                 : Diagonal::nw_se;
+}
+
+GridTin grid_tin(const HeightGrid& g, Diagonal diagonal) {
   GridTin t;
   t.cells = surface_cells(g);
   // Surface cell -> vertex index.
@@ -53,9 +61,12 @@ GridTin grid_tin(const HeightGrid& g) {
       const std::uint32_t a = index[g.index(c, r)], b = index[g.index(c + 1, r)];
       const std::uint32_t s = index[g.index(c, r + 1)], d = index[g.index(c + 1, r + 1)];
       const int n = va + vb + vs + vd;
-      if (n == 4) {
+      if (n == 4 && diagonal == Diagonal::nw_se) {
         t.faces.push_back({a, s, d});
         t.faces.push_back({a, d, b});
+      } else if (n == 4) {
+        t.faces.push_back({a, s, b});
+        t.faces.push_back({b, s, d});
       } else if (n == 3) {
         if (!va) t.faces.push_back({b, s, d});
         if (!vb) t.faces.push_back({a, s, d});

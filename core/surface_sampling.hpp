@@ -11,16 +11,24 @@
 
 namespace dpts::core {
 
-// The full-resolution TIN T of a DEM: every grid square with 4 valid corners split along its
-// NW-SE diagonal (row,col)-(row+1,col+1), every square with exactly 3 valid corners as that
-// triangle (the valid footprint, see footprint.hpp). This is also the Delaunay TIN the
+// Which diagonal splits each full grid square.
+enum class Diagonal { nw_se, ne_sw };
+
+// The diagonal the Delaunay triangulation of the grid in `frame` takes: NW-SE
+// (row,col)-(row+1,col+1) for a square or rectangular grid (a tie, broken so by CGAL's
+// symbolic perturbation), the shorter one for a sheared grid (a reprojected DEM).
+Diagonal delaunay_diagonal(const GridFrame& frame);
+
+// The full-resolution TIN T of a DEM: every grid square with 4 valid corners split along the
+// given diagonal, every square with exactly 3 valid corners as that triangle (the valid
+// footprint, see footprint.hpp). With delaunay_diagonal(frame) this is the Delaunay TIN the
 // elimination starts from. Vertices are the surface cells (ascending); faces index them, in
 // the grid's orientation (fix_orientation() makes them counter-clockwise in a given CRS).
 struct GridTin {
   std::vector<std::uint32_t> cells;
   std::vector<std::array<std::uint32_t, 3>> faces;
 };
-GridTin grid_tin(const HeightGrid& grid);
+GridTin grid_tin(const HeightGrid& grid, Diagonal diagonal = Diagonal::nw_se);
 
 // Reverses every face that is clockwise in mesh.xyz's x, y.
 void fix_orientation(TriMesh& mesh);

@@ -75,8 +75,8 @@ struct Dem : DemInfo {
   core::HeightGrid grid;
   std::size_t valid_cells = 0;
 
-  // The DEM's full-resolution grid TIN (core::grid_tin: the TIN the elimination starts from)
-  // in the output CRS, faces counter-clockwise; vertices in surface-cell order. Throws
+  // The DEM's full-resolution grid TIN (core::grid_tin with the frame's Delaunay diagonal: the
+  // TIN the elimination starts from) in the output CRS, faces counter-clockwise; vertices in surface-cell order. Throws
   // InputError when the DEM has no face.
   core::TriMesh grid_mesh() const;
 };

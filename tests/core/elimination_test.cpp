@@ -9,6 +9,7 @@
 
 #include "core/footprint.hpp"
 #include "core/mesh_check.hpp"
+#include "core/surface_sampling.hpp"
 #include "parallel/simplify.hpp"
 #include "test_support.hpp"
 
@@ -185,4 +186,34 @@ TEST_CASE("an outline chord the caller refuses keeps its outline vertices", "[co
   CHECK(on_outline - 4 < 38);
   CHECK(tin.cells.size() == on_outline - 4);  // the plane's interior is all gone
   test::check_tin(g, tin);
+}
+
+TEST_CASE("the unsimplified TIN takes the frame's Delaunay diagonal, as grid_tin says",
+          "[core][simplify]") {
+  // A reprojected DEM's frame is sheared: Delaunay splits every square along its shorter
+  // diagonal, which is NE-SW for one shear and NW-SE for the other (and for a square grid).
+  const auto g = hills(20, 16);
+  const double shears[3][2][2] = {{{20.0, 0.4}, {-0.3, -31.0}},
+                                  {{20.0, -0.4}, {0.3, -31.0}},
+                                  {{30.0, 0.0}, {0.0, -30.0}}};
+  for (const auto& j : shears) {
+    const auto frame = core::GridFrame::from_jacobian(j);
+    const std::size_t input = core::surface_cells(g).size();
+    const core::Tin tin = simplify(g, core::Importance::vp, input, frame);
+    const core::GridTin grid = core::grid_tin(g, core::delaunay_diagonal(frame));
+    // The same triangles, as sets of cells.
+    auto as_sets = [](const std::vector<std::uint32_t>& cells, const auto& faces) {
+      std::vector<std::array<std::uint32_t, 3>> out;
+      for (const auto& f : faces) {
+        std::array<std::uint32_t, 3> t{cells[f[0]], cells[f[1]], cells[f[2]]};
+        std::sort(t.begin(), t.end());
+        out.push_back(t);
+      }
+      std::sort(out.begin(), out.end());
+      return out;
+    };
+    CHECK(as_sets(tin.cells, tin.faces) == as_sets(grid.cells, grid.faces));
+  }
+  CHECK(core::delaunay_diagonal(core::GridFrame::from_jacobian(shears[0])) !=
+        core::delaunay_diagonal(core::GridFrame::from_jacobian(shears[1])));
 }

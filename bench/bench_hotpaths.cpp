@@ -1,0 +1,94 @@
+// Microbenchmarks of the hot paths, single-threaded, with throughput counters:
+//   BM_importance/vp, /pld   initial importance of every vertex (simulated removal + VP or PLD)
+//                            of the 153k-cell St Helens DEM: vertices/s
+//   BM_remove_with_update    Delaunay removal of the least important vertex and re-evaluation of
+//                            its link, from the full TIN down to 10 % (VP): removals/s
+//   BM_piece_value           the value of one 4096-cell piece (20 points, 190 pairs of Steiner
+//                            geodesics): pieces/s and pairs/s
+// (BM_dijkstra_one_source, in bench_geodesic.cpp, is the Steiner-graph Dijkstra per source.)
+#include <benchmark/benchmark.h>
+#include <cpl_conv.h>
+#include <gdal_priv.h>
+#include <tbb/global_control.h>
+
+#include <memory>
+#include <string>
+
+#include "core/elimination.hpp"
+#include "io/dem_reader.hpp"
+#include "parallel/meta.hpp"
+
+namespace {
+
+const std::string kDem = std::string(DPTS_SHARED_DATA_DIR) + "/st_helens_full.tif";
+
+const dpts::io::Dem* load() {
+  static std::unique_ptr<dpts::io::Dem> dem = [] {
+    GDALAllRegister();
+    CPLSetConfigOption("GDAL_CACHEMAX", "64");
+    try {
+      return std::make_unique<dpts::io::Dem>(dpts::io::read_dem(kDem, {}, nullptr));
+    } catch (const std::exception&) {
+      return std::unique_ptr<dpts::io::Dem>();
+    }
+  }();
+  return dem.get();
+}
+
+void BM_importance(benchmark::State& state, dpts::core::Importance kind) {
+  const dpts::io::Dem* dem = load();
+  if (!dem) return state.SkipWithError(("cannot read " + kDem).c_str());
+  dpts::core::EliminationOptions opt;
+  opt.importance = kind;
+  dpts::core::Eliminator elim(dem->grid, dem->frame, opt);
+  for (auto _ : state) elim.compute_importance(0, elim.vertex_count());
+  state.counters["vertices/s"] = benchmark::Counter(
+      static_cast<double>(elim.vertex_count()) * state.iterations(), benchmark::Counter::kIsRate);
+}
+BENCHMARK_CAPTURE(BM_importance, vp, dpts::core::Importance::vp)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_importance, pld, dpts::core::Importance::pld)->Unit(benchmark::kMillisecond);
+
+void BM_remove_with_update(benchmark::State& state) {
+  const dpts::io::Dem* dem = load();
+  if (!dem) return state.SkipWithError(("cannot read " + kDem).c_str());
+  std::size_t removals = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    auto elim = std::make_unique<dpts::core::Eliminator>(dem->grid, dem->frame,
+                                                         dpts::core::EliminationOptions{});
+    elim->compute_importance(0, elim->vertex_count());
+    const std::size_t before = elim->alive_count();
+    state.ResumeTiming();
+    elim->eliminate(before / 10, nullptr);
+    state.PauseTiming();
+    removals += before - elim->alive_count();
+    elim.reset();
+    state.ResumeTiming();
+  }
+  state.counters["removals/s"] =
+      benchmark::Counter(static_cast<double>(removals), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_remove_with_update)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+void BM_piece_value(benchmark::State& state) {
+  const dpts::io::Dem* dem = load();
+  if (!dem) return state.SkipWithError(("cannot read " + kDem).c_str());
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  // A 64 x 64 window in the crater: no subsampling.
+  dpts::core::HeightGrid window;
+  window.width = window.height = 64;
+  const int c0 = 140, r0 = 200;
+  for (int r = 0; r < 64; ++r) {
+    for (int c = 0; c < 64; ++c) window.z.push_back(dem->grid.z[dem->grid.index(c0 + c, r0 + r)]);
+  }
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(dpts::par::piece_value(window, c0, r0, dem->frame, 20, 4096, 1));
+  }
+  state.counters["pieces/s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["pairs/s"] =
+      benchmark::Counter(190.0 * state.iterations(), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_piece_value)->Unit(benchmark::kMillisecond);
+
+}  // namespace
