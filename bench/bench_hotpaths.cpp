@@ -7,37 +7,25 @@
 //                            geodesics): pieces/s and pairs/s
 // (BM_dijkstra_one_source, in bench_geodesic.cpp, is the Steiner-graph Dijkstra per source.)
 #include <benchmark/benchmark.h>
-#include <cpl_conv.h>
-#include <gdal_priv.h>
 #include <tbb/global_control.h>
 
 #include <memory>
 #include <string>
 
+#include "bench_support.hpp"
 #include "core/elimination.hpp"
 #include "io/dem_reader.hpp"
 #include "parallel/meta.hpp"
 
 namespace {
 
-const std::string kDem = std::string(DPTS_SHARED_DATA_DIR) + "/st_helens_full.tif";
+const std::string kDem = "st_helens_full.tif";
 
-const dpts::io::Dem* load() {
-  static std::unique_ptr<dpts::io::Dem> dem = [] {
-    GDALAllRegister();
-    CPLSetConfigOption("GDAL_CACHEMAX", "64");
-    try {
-      return std::make_unique<dpts::io::Dem>(dpts::io::read_dem(kDem, {}, nullptr));
-    } catch (const std::exception&) {
-      return std::unique_ptr<dpts::io::Dem>();
-    }
-  }();
-  return dem.get();
-}
+const dpts::io::Dem* load() { return dpts::bench::shared_dem(kDem); }
 
 void BM_importance(benchmark::State& state, dpts::core::Importance kind) {
   const dpts::io::Dem* dem = load();
-  if (!dem) return state.SkipWithError(("cannot read " + kDem).c_str());
+  if (!dem) return state.SkipWithError(("cannot read " + dpts::bench::shared_path(kDem)).c_str());
   dpts::core::EliminationOptions opt;
   opt.importance = kind;
   dpts::core::Eliminator elim(dem->grid, dem->frame, opt);
@@ -50,7 +38,7 @@ BENCHMARK_CAPTURE(BM_importance, pld, dpts::core::Importance::pld)->Unit(benchma
 
 void BM_remove_with_update(benchmark::State& state) {
   const dpts::io::Dem* dem = load();
-  if (!dem) return state.SkipWithError(("cannot read " + kDem).c_str());
+  if (!dem) return state.SkipWithError(("cannot read " + dpts::bench::shared_path(kDem)).c_str());
   std::size_t removals = 0;
   for (auto _ : state) {
     state.PauseTiming();
@@ -72,7 +60,7 @@ BENCHMARK(BM_remove_with_update)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 void BM_piece_value(benchmark::State& state) {
   const dpts::io::Dem* dem = load();
-  if (!dem) return state.SkipWithError(("cannot read " + kDem).c_str());
+  if (!dem) return state.SkipWithError(("cannot read " + dpts::bench::shared_path(kDem)).c_str());
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
   // A 64 x 64 window in the crater: no subsampling.
   dpts::core::HeightGrid window;

@@ -1,36 +1,23 @@
 // BM_simplify_dem: VP and PLD to 10 % on the 770k-cell San Gabriel DEM, in input cells/s.
 #include <benchmark/benchmark.h>
-#include <cpl_conv.h>
-#include <gdal_priv.h>
 #include <tbb/global_control.h>
 
-#include <memory>
 #include <string>
 
+#include "bench_support.hpp"
 #include "io/dem_reader.hpp"
 #include "parallel/simplify.hpp"
 
 namespace {
 
-const std::string kDem = std::string(DPTS_SHARED_DATA_DIR) + "/san_gabriel_bigtujunga_utm11.tif";
+const std::string kDem = "san_gabriel_bigtujunga_utm11.tif";
 
-const dpts::io::Dem* load() {
-  static std::unique_ptr<dpts::io::Dem> dem = [] {
-    GDALAllRegister();
-    CPLSetConfigOption("GDAL_CACHEMAX", "64");
-    try {
-      return std::make_unique<dpts::io::Dem>(dpts::io::read_dem(kDem, {}, nullptr));
-    } catch (const std::exception&) {
-      return std::unique_ptr<dpts::io::Dem>();
-    }
-  }();
-  return dem.get();
-}
+const dpts::io::Dem* load() { return dpts::bench::shared_dem(kDem); }
 
 void BM_simplify_dem(benchmark::State& state, dpts::core::Importance kind) {
   const dpts::io::Dem* dem = load();
   if (!dem) {
-    state.SkipWithError(("cannot read " + kDem).c_str());
+    state.SkipWithError(("cannot read " + dpts::bench::shared_path(kDem)).c_str());
     return;
   }
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism,

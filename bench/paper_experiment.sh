@@ -19,6 +19,18 @@ names=("PLD'" "PLD" "VP'" "VP" "QSlim" "VP exact" "VP' exact")
 args=("--algo pld-meta" "--algo pld" "--algo vp-meta --vp-volume mc" "--algo vp --vp-volume mc"
       "--algo qslim" "--algo vp" "--algo vp-meta")
 sizes=(10 30 50 70)
+# Prints a Markdown table of the associative array named $1 (keys "column,size") with printf
+# format $2 per cell.
+table() {
+  local -n cells=$1
+  printf "| size |"; printf " %s |" "${names[@]}"; echo
+  printf "|---|"; for _ in "${names[@]}"; do printf -- "---|"; done; echo
+  for p in "${sizes[@]}"; do
+    printf "| %s%% |" "$p"
+    for k in "${!names[@]}"; do printf " $2 |" "${cells[$k,$p]}"; done
+    echo
+  done
+}
 start=$(date +%s)
 total_cells=0; vpm_wins=0; best_wins=0
 for dem in "$@"; do
@@ -41,12 +53,8 @@ for dem in "$@"; do
   echo
   echo "Distance-preserving error (mean over 3 sets of 100 points of |GD_T - GD_T'| / GD_T):"
   echo
-  printf "| size |"; printf " %s |" "${names[@]}"; echo
-  printf "|---|"; for _ in "${names[@]}"; do printf -- "---|"; done; echo
+  table err "%.6f"
   for p in "${sizes[@]}"; do
-    printf "| %s%% |" "$p"
-    for k in "${!names[@]}"; do printf " %.6f |" "${err[$k,$p]}"; done
-    echo
     total_cells=$((total_cells + 1))
     # VP' (the paper's) against QSlim; the best of ours (any column but QSlim) against QSlim.
     awk -v a="${err[2,$p]}" -v q="${err[4,$p]}" 'BEGIN { exit !(a < q) }' && vpm_wins=$((vpm_wins + 1))
@@ -56,13 +64,7 @@ for dem in "$@"; do
   echo
   echo "Simplification wall time, seconds (dpts-par, all threads of this machine):"
   echo
-  printf "| size |"; printf " %s |" "${names[@]}"; echo
-  printf "|---|"; for _ in "${names[@]}"; do printf -- "---|"; done; echo
-  for p in "${sizes[@]}"; do
-    printf "| %s%% |" "$p"
-    for k in "${!names[@]}"; do printf " %s |" "${secs[$k,$p]}"; done
-    echo
-  done
+  table secs "%s"
   echo
   unset err secs
 done
