@@ -45,22 +45,26 @@ std::vector<std::size_t> piece_budgets(const std::vector<std::size_t>& counts,
       keep[i] = std::clamp(keep[i] + diff * r / room, lo[i], hi[i]);
     }
   }
-  // Largest remainder rounding to the exact integer target.
+  return largest_remainder(keep, static_cast<std::size_t>(target), counts);
+}
+
+std::vector<std::size_t> largest_remainder(const std::vector<double>& shares, std::size_t total,
+                                           const std::vector<std::size_t>& caps) {
+  const std::size_t m = shares.size();
   std::vector<std::size_t> out(m);
   std::vector<std::pair<double, std::size_t>> rest;
   std::size_t sum = 0;
   for (std::size_t i = 0; i < m; ++i) {
-    out[i] = static_cast<std::size_t>(std::floor(keep[i] + 1e-9));
+    out[i] = std::min(caps[i], static_cast<std::size_t>(std::floor(shares[i] + 1e-9)));
     sum += out[i];
-    rest.emplace_back(keep[i] - out[i], i);
+    rest.emplace_back(shares[i] - static_cast<double>(out[i]), i);
   }
   std::sort(rest.begin(), rest.end(), [](const auto& a, const auto& b) {
     return a.first > b.first || (a.first == b.first && a.second < b.second);
   });
-  const auto goal = static_cast<std::size_t>(target);
-  for (std::size_t k = 0; sum < goal && k < rest.size(); ++k) {
+  for (std::size_t k = 0; sum < total && k < rest.size(); ++k) {
     const std::size_t i = rest[k].second;
-    if (out[i] < counts[i]) ++out[i], ++sum;
+    if (out[i] < caps[i]) ++out[i], ++sum;
   }
   return out;
 }

@@ -18,4 +18,10 @@ std::vector<std::size_t> piece_budgets(const std::vector<std::size_t>& counts,
                                        const std::vector<double>& values, double p2l,
                                        std::size_t min_keep = 3);
 
+// Integer parts of non-negative `shares` that add up to exactly `total`: each share rounded
+// down (after a 1e-9 nudge against rounding), then one more to the largest remainders (ties to
+// the lower index), never above its cap. Fewer than `total` only when the caps do not allow it.
+std::vector<std::size_t> largest_remainder(const std::vector<double>& shares, std::size_t total,
+                                           const std::vector<std::size_t>& caps);
+
 }  // namespace dpts::core

@@ -407,22 +407,13 @@ MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
   }
   std::vector<std::size_t> extra(outputs.size(), 0);
   if (deficit > 0 && room > 0) {
-    const std::size_t take = std::min(deficit, room);
-    std::vector<std::pair<double, std::size_t>> rest;
-    std::size_t given = 0;
-    for (std::size_t i = 0; i < outputs.size(); ++i) {
-      const double share = static_cast<double>(take) * outputs[i].tail.size() / room;
-      extra[i] = static_cast<std::size_t>(share);
-      given += extra[i];
-      rest.emplace_back(share - extra[i], i);
+    std::vector<double> shares;
+    std::vector<std::size_t> caps;
+    for (const PieceOutput& o : outputs) {
+      shares.push_back(static_cast<double>(std::min(deficit, room)) * o.tail.size() / room);
+      caps.push_back(o.tail.size());
     }
-    std::sort(rest.begin(), rest.end(), [](const auto& a, const auto& b) {
-      return a.first > b.first || (a.first == b.first && a.second < b.second);
-    });
-    for (std::size_t k = 0; given < take && k < rest.size(); ++k) {
-      const std::size_t i = rest[k].second;
-      if (extra[i] < outputs[i].tail.size()) ++extra[i], ++given;
-    }
+    extra = core::largest_remainder(shares, std::min(deficit, room), caps);
   }
   std::vector<std::pair<std::uint32_t, double>> kept;
   std::vector<core::OutlineEdge> outline;

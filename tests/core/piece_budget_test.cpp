@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 #include <numeric>
 
+using dpts::core::largest_remainder;
 using dpts::core::piece_budgets;
 
 TEST_CASE("equal piece values give every piece the overall percentage", "[core][budget]") {
@@ -32,4 +33,16 @@ TEST_CASE("clamped pieces hand their excess to the others and the total stays ex
 TEST_CASE("budgets never exceed a piece and reach 100 % exactly", "[core][budget]") {
   const auto b = piece_budgets({10, 20, 30}, {0.99, 0.5, 0.7}, 100.0);
   CHECK(b == std::vector<std::size_t>{10, 20, 30});
+}
+
+TEST_CASE("largest remainder rounding hits the total exactly, within caps", "[core][budget]") {
+  // 10 split 1/3 : 1/3 : 1/3 -> 4, 3, 3 (ties to the lower index).
+  CHECK(largest_remainder({10.0 / 3, 10.0 / 3, 10.0 / 3}, 10, {10, 10, 10}) ==
+        std::vector<std::size_t>{4, 3, 3});
+  // Largest remainders first: 1.2, 2.7, 3.1 -> 1, 3, 3 for a total of 7.
+  CHECK(largest_remainder({1.2, 2.7, 3.1}, 7, {5, 5, 5}) == std::vector<std::size_t>{1, 3, 3});
+  // A cap stops a piece; the next remainder gets the unit.
+  CHECK(largest_remainder({1.2, 2.7, 3.1}, 7, {5, 2, 5}) == std::vector<std::size_t>{2, 2, 3});
+  // Caps too small for the total: as close as they allow.
+  CHECK(largest_remainder({2.5, 2.5}, 5, {2, 2}) == std::vector<std::size_t>{2, 2});
 }
