@@ -137,13 +137,13 @@ int run_qslim(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printe
                  stats.rejected_folds);
   }
   // Back to grid positions (the frame is linear), then to the output CRS.
-  const auto& m = dem.frame.m;
-  const double det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+  double inv[2][2];
+  dem.frame.inverse(inv);
   std::vector<double> grid_xy(2 * result.vertex_count());
   for (std::size_t v = 0; v < result.vertex_count(); ++v) {
     const double u = result.xyz[3 * v], w = result.xyz[3 * v + 1];
-    grid_xy[2 * v] = (m[1][1] * u - m[0][1] * w) / det;
-    grid_xy[2 * v + 1] = (-m[1][0] * u + m[0][0] * w) / det;
+    grid_xy[2 * v] = inv[0][0] * u + inv[0][1] * w;
+    grid_xy[2 * v + 1] = inv[1][0] * u + inv[1][1] * w;
   }
   const std::vector<double> xy = dem.output_xy_of_grid(grid_xy);
   const std::size_t faces = result.faces.size();

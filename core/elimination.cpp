@@ -92,9 +92,7 @@ struct Eliminator::Impl {
 
   Impl(const HeightGrid& g, const GridFrame& f, const EliminationOptions& o)
       : grid(g), footprint(g), frame(f), options(o) {
-    const double det = f.m[0][0] * f.m[1][1] - f.m[0][1] * f.m[1][0];
-    inv[0][0] = f.m[1][1] / det, inv[0][1] = -f.m[0][1] / det;
-    inv[1][0] = -f.m[1][0] / det, inv[1][1] = f.m[0][0] / det;
+    f.inverse(inv);
   }
 
   Point3 metric(VertexHandle v) const {

@@ -40,6 +40,13 @@ struct GridFrame {
   double u(int col, int row) const { return m[0][0] * col + m[0][1] * row; }
   double w(int col, int row) const { return m[1][0] * col + m[1][1] * row; }
 
+  // The inverse map, frame (u, w) -> grid (col, row): col = inv[0] . (u, w), row = inv[1] . (u, w).
+  void inverse(double inv[2][2]) const {
+    const double det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+    inv[0][0] = m[1][1] / det, inv[0][1] = -m[0][1] / det;
+    inv[1][0] = -m[1][0] / det, inv[1][1] = m[0][0] / det;
+  }
+
   // Frame for a metric Jacobian j (metres per column step and per row step:
   // j[0] = (dx/dcol, dx/drow), j[1] = (dy/dcol, dy/drow)). Throws std::invalid_argument
   // when the Jacobian is singular or not finite.
