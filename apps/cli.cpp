@@ -15,7 +15,7 @@ namespace {}  // namespace
 std::string par_help() {
   return R"(usage: dpts-par [options] INPUT OUTPUT
 
-Simplifies a DEM (band 1 of any raster GDAL reads) into a TIN that preserves surface
+Simplifies a DEM (a band of any raster GDAL reads) into a TIN that preserves surface
 (geodesic) distances, by Delaunay vertex elimination, and writes it as PLY.
 
   --algo ALGO          vp: importance = volume between the surfaces before and after a
@@ -40,13 +40,17 @@ Simplifies a DEM (band 1 of any raster GDAL reads) into a TIN that preserves sur
   --tile-mb M          vp-meta/pld-meta: memory budget of one piece in MB (default 256);
                        peak memory is about threads x M plus the kept vertices. vp and pld
                        read the whole DEM
+  --band B             the band holding the heights (default 1)
+  --max-memory MB      refuse, before reading the heights, a run estimated to need more
+                       memory than MB (default: the memory available when it starts)
   --ascii              write ASCII PLY (default: binary little-endian)
   --config KEY VALUE   set a GDAL configuration option
   --quiet              no progress or summary on stderr (warnings still show)
   --help, --version
 
-Every valid cell centre is a vertex; no-data and NaN cells are not, and no face covers a
-void or leaves the valid data. Output: vertex x y z (double, output CRS), faces
+Every valid cell centre is a vertex; no-data, NaN, infinite and absurd (beyond +-1e7)
+heights are not, and no face covers a void or leaves the valid data. Heights are the
+band's values with its scale and offset applied; any real cell type is read. Output: vertex x y z (double, output CRS), faces
 counter-clockwise seen from above, the CRS as WKT in a header comment. The output file
 appears only when complete. Exit status: 0 ok, 1 failure, 2 bad usage.
 )";
@@ -135,6 +139,10 @@ ParOptions parse_par(const std::vector<std::string>& args) {
     } else if (arg == "--t-srs") {
       o.t_srs = need(arg);
       if (o.t_srs.empty()) throw UsageError("--t-srs: expected a CRS");
+    } else if (arg == "--band") {
+      o.band = parse_number<int>(arg, need(arg), 1, "an integer >= 1");
+    } else if (arg == "--max-memory") {
+      o.max_memory_mb = parse_number<std::size_t>(arg, need(arg), 1, "an integer >= 1 (MB)");
     } else if (arg == "--ascii") {
       o.ascii = true;
     } else if (arg == "--quiet" || arg == "-q") {

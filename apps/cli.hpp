@@ -30,6 +30,8 @@ struct ParOptions {
   int threads = 0;  // 0: all cores
   int tile_mb = 256;
   std::string t_srs;
+  int band = 1;
+  std::size_t max_memory_mb = 0;  // 0: the memory available when the run starts
   bool ascii = false;
   bool quiet = false;
   bool help = false;

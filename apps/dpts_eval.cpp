@@ -6,6 +6,7 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include <algorithm>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -146,9 +147,26 @@ int run(const Options& o) {
   const core::TriMesh t = dem.grid_mesh();
   // T': the mesh.
   io::Mesh ply = io::read_ply_file(o.mesh);
-  if (ply.faces.empty()) throw InputError(o.mesh + ": has no faces");
-  for (double v : ply.xyz) {
-    if (!std::isfinite(v)) throw InputError(o.mesh + ": has a non-finite vertex coordinate");
+  io::check_triangles(ply, o.mesh);
+  // A mesh of this DEM lies on its footprint; one far outside it is another DEM's, or in
+  // another CRS (and its Steiner graph could be unboundedly large).
+  {
+    double lo[2] = {t.xyz[0], t.xyz[1]}, hi[2] = {t.xyz[0], t.xyz[1]};
+    for (std::size_t v = 0; v < t.vertex_count(); ++v) {
+      for (int k = 0; k < 2; ++k) {
+        lo[k] = std::min(lo[k], t.xyz[3 * v + k]);
+        hi[k] = std::max(hi[k], t.xyz[3 * v + k]);
+      }
+    }
+    const double margin = 0.01 * std::hypot(hi[0] - lo[0], hi[1] - lo[1]);
+    for (std::size_t v = 0; v < ply.vertex_count(); ++v) {
+      const double x = ply.xyz[3 * v], y = ply.xyz[3 * v + 1];
+      if (x < lo[0] - margin || x > hi[0] + margin || y < lo[1] - margin || y > hi[1] + margin) {
+        throw InputError(o.mesh + ": vertex " + std::to_string(v) + " (" + std::to_string(x) +
+                         ", " + std::to_string(y) + ") lies outside " + o.dem +
+                         "; is the mesh of another DEM or in another CRS?");
+      }
+    }
   }
   core::TriMesh s{std::move(ply.xyz), std::move(ply.faces)};
 
@@ -188,7 +206,12 @@ int run(const Options& o) {
       std::fprintf(stderr, "dpts-eval: %s (%.0f s)\n", what.c_str(), elapsed);
     return true;  // note: dpts-eval writes no file, so Ctrl-C may simply end the process
   };
-  const par::EvalResult r = par::evaluate_distances(t, s, eo, progress);
+  par::EvalResult r;
+  try {
+    r = par::evaluate_distances(t, s, eo, progress);
+  } catch (const std::invalid_argument& e) {  // the mesh's structure (see SteinerGraph)
+    throw InputError(o.mesh + ": " + e.what());
+  }
   const double secs =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double rmse = measured ? std::sqrt(sq / measured) : 0.0;

@@ -38,6 +38,36 @@ bool same_file(const std::string& a, const std::string& b) {
   return std::filesystem::weakly_canonical(a, ec) == std::filesystem::weakly_canonical(b, ec);
 }
 
+dpts::io::DemReadOptions read_options(const dpts::cli::ParOptions& o) {
+  dpts::io::DemReadOptions r;
+  r.t_srs = o.t_srs;
+  r.band = o.band;
+  return r;
+}
+
+// The memory a run may use: --max-memory, or what the system has available now.
+std::size_t memory_limit(const dpts::cli::ParOptions& o) {
+  return o.max_memory_mb > 0 ? o.max_memory_mb << 20 : dpts::par::available_memory_bytes();
+}
+
+// Opens the DEM and reads it whole, refusing first (with the estimate) a DEM whose whole-DEM
+// run would not fit in memory.
+dpts::io::Dem read_whole_dem(const dpts::cli::ParOptions& o, std::size_t bytes_per_cell,
+                             const dpts::core::Progress& progress) {
+  using namespace dpts;
+  io::DemInfo info = io::open_dem(o.input, read_options(o));
+  const double need = static_cast<double>(info.cell_count()) * bytes_per_cell;
+  const std::size_t limit = memory_limit(o);
+  if (need > static_cast<double>(limit)) {
+    throw InputError(o.input + ": " + std::to_string(info.width) + " x " +
+                     std::to_string(info.height) + " cells need about " + par::format_bytes(need) +
+                     " with --algo " + o.algo_text + " (the whole DEM in memory), more than the " +
+                     par::format_bytes(static_cast<double>(limit)) +
+                     " available; --algo vp-meta or pld-meta reads it in tiles");
+  }
+  return io::read_dem(std::move(info), progress);
+}
+
 void print_notes(const dpts::io::DemInfo& dem, const dpts::cli::ParOptions& o) {
   for (const std::string& note : dem.notes) {
     if (!o.quiet || note.rfind("warning", 0) == 0) std::cerr << "dpts-par: " << note << "\n";
@@ -82,8 +112,12 @@ void write_mesh(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem, dp
   mesh.comments.push_back(generated + " from " +
                           std::filesystem::path(o.input).filename().string());
   mesh.comments.push_back("crs " + (dem.output_wkt.empty() ? std::string("none") : dem.output_wkt));
-  io::write_ply(out.stream(), mesh,
-                o.ascii ? io::PlyFormat::ascii : io::PlyFormat::binary_little_endian);
+  try {
+    io::write_ply(out.stream(), mesh,
+                  o.ascii ? io::PlyFormat::ascii : io::PlyFormat::binary_little_endian);
+  } catch (const IoError& e) {
+    throw IoError(o.output + ": " + e.what());
+  }
   if (g_cancel) throw Cancelled();
   out.commit();
 }
@@ -107,7 +141,7 @@ void write_output(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem, 
 int run_qslim(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer,
               const dpts::core::Progress& progress, std::chrono::steady_clock::time_point start) {
   using namespace dpts;
-  io::Dem dem = io::read_dem(o.input, io::DemReadOptions{o.t_srs}, progress);
+  io::Dem dem = read_whole_dem(o, core::kQslimBytesPerCell, progress);
   print_notes(dem, o);
   io::AtomicOutputFile out(o.output);
   if (!progress(0.0, "qslim")) throw Cancelled();
@@ -165,7 +199,7 @@ bool g_user_cache = false;  // GDAL_CACHEMAX came from the environment
 int run_meta(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer,
              const dpts::core::Progress& progress, std::chrono::steady_clock::time_point start) {
   using namespace dpts;
-  io::DemInfo dem = io::open_dem(o.input, io::DemReadOptions{o.t_srs});
+  io::DemInfo dem = io::open_dem(o.input, read_options(o));
   print_notes(dem, o);
   io::AtomicOutputFile out(o.output);
   const std::size_t tile_bytes = static_cast<std::size_t>(o.tile_mb) << 20;
@@ -183,9 +217,12 @@ int run_meta(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer
   mo.tile_bytes = tile_bytes;
   mo.value_points = o.value_points;
   mo.seed = o.elimination.seed;
+  mo.memory_limit_bytes = memory_limit(o);
   par::MetaStats stats;
   par::MetaResult result = par::simplify_meta(dem, mo, progress, &stats);
   printer.finish();
+  const std::string absurd = io::absurd_heights_note(dem, stats.absurd_cells);
+  if (!absurd.empty()) std::cerr << "dpts-par: " << absurd << "\n";
   if (o.verbose) {
     std::fprintf(stderr,
                  "dpts-par: %zu pieces (blocks of %d cells), %zu surface vertices, keep %zu\n",
@@ -251,7 +288,7 @@ int run(const dpts::cli::ParOptions& o) {
 
   if (o.meta) return run_meta(o, printer, progress, start);
   if (o.qslim) return run_qslim(o, printer, progress, start);
-  io::Dem dem = io::read_dem(o.input, io::DemReadOptions{o.t_srs}, progress);
+  io::Dem dem = read_whole_dem(o, io::DemInfo::kWholeDemBytesPerCell, progress);
   print_notes(dem, o);
   // The input is valid: now claim the output (fails early when it cannot be written).
   io::AtomicOutputFile out(o.output);

@@ -41,6 +41,12 @@ GridFrame GridFrame::from_jacobian(const double j[2][2]) {
       f.m[a][b] = std::ldexp(std::nearbyint(std::ldexp(j[a][b] / scale, 24)), -24);
     }
   }
+  // Cells with one side over 10^4 times the other (or nearly parallel sides) are no terrain
+  // grid, and the rounding above would flatten them.
+  const double det_rounded = f.m[0][0] * f.m[1][1] - f.m[0][1] * f.m[1][0];
+  if (!(std::fabs(det_rounded) >= 1e-4) || !(std::fabs(det_rounded) <= 1e4)) {
+    throw std::invalid_argument("cells are too thin: one side over 10^4 times the other");
+  }
   f.metres_per_unit = scale;
   return f;
 }

@@ -49,7 +49,8 @@ struct GridFrame {
 
   // Frame for a metric Jacobian j (metres per column step and per row step:
   // j[0] = (dx/dcol, dx/drow), j[1] = (dy/dcol, dy/drow)). Throws std::invalid_argument
-  // when the Jacobian is singular or not finite.
+  // when the Jacobian is singular or not finite, or its cells are too thin (one side over
+  // 10^4 times the other, or sides nearly parallel).
   static GridFrame from_jacobian(const double j[2][2]);
 };
 

@@ -17,6 +17,10 @@
 
 namespace dpts::core {
 
+// Bytes a QSlim run holds per raster cell (grid, surface mesh with quadrics and the collapse
+// queue), measured on real DEMs with some margin (README, memory).
+inline constexpr std::size_t kQslimBytesPerCell = 560;
+
 struct QslimStats {
   std::size_t input_vertices = 0, kept_vertices = 0;
   std::size_t rejected_folds = 0;  // collapses refused because a triangle would fold

@@ -6,6 +6,7 @@
 #include <functional>
 #include <limits>
 #include <stdexcept>
+#include <string>
 #include <tuple>
 
 namespace dpts::core {
@@ -50,6 +51,20 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
   const std::size_t nv = mesh.vertex_count();
   face_edges_.resize(mesh.faces.size());
   const auto e = sorted_face_edges(mesh);
+  // Count the nodes before allocating any: a mesh far larger than delta (or with a non-finite
+  // coordinate) is refused here, not by running out of memory.
+  double nodes = static_cast<double>(nv);
+  for (std::size_t i = 0; i < e.size(); ++i) {
+    if (i > 0 && std::get<0>(e[i]) == std::get<0>(e[i - 1])) continue;
+    const std::uint64_t key = std::get<0>(e[i]);
+    nodes += std::floor(dist3(&mesh.xyz[3 * (key >> 32)], &mesh.xyz[3 * (key & 0xFFFFFFFFu)]) /
+                        delta);
+  }
+  if (!(nodes < static_cast<double>(kMaxNodes))) {
+    throw std::invalid_argument("too many Steiner points (" + std::to_string(nodes) +
+                                "; at most " + std::to_string(kMaxNodes) + ")");
+  }
+  pos_.reserve(3 * static_cast<std::size_t>(nodes));
   pos_.assign(mesh.xyz.begin(), mesh.xyz.end());
   edge_first_.push_back(static_cast<std::uint32_t>(nv));
   for (std::size_t i = 0; i < e.size();) {
@@ -76,7 +91,6 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
     }
     edge_first_.push_back(static_cast<std::uint32_t>(pos_.size() / 3));
   }
-  if (pos_.size() / 3 >= 0x7FFFFFFFu) throw std::invalid_argument("too many Steiner points");
   // Vertex -> faces, CSR.
   vertex_face_first_.assign(nv + 1, 0);
   for (const auto& f : mesh.faces) {
@@ -201,7 +215,10 @@ void GeodesicQuery::distances(const SurfacePoint& source, const std::vector<Surf
   relax_face(source.face, src, 0.0);
   std::size_t remaining = targets.size();
   while (!heap_.empty() && remaining > 0) {
-    const auto [d, u] = heap_.pop();
+    // note: no structured binding: C++17 lambdas (clang) cannot capture one.
+    const std::pair<double, std::uint32_t> top = heap_.pop();
+    const double d = top.first;
+    const std::uint32_t u = top.second;
     if (u >= n) {
       out[u - n] = d;
       --remaining;

@@ -30,8 +30,12 @@ struct SurfacePoint {
 
 class SteinerGraph {
  public:
+  // Most nodes a graph may have (node ids are 32-bit, and signed where Dijkstra stores them).
+  static constexpr std::uint32_t kMaxNodes = 0x7FFFFFFFu;
+
   // Builds edges, face adjacency and Steiner point positions. Throws std::invalid_argument if
-  // an edge has more than two faces or delta is not positive. The mesh must outlive the graph.
+  // an edge has more than two faces, delta is not positive, or the graph would have more than
+  // kMaxNodes nodes (checked before allocating). The mesh must outlive the graph.
   SteinerGraph(const TriMesh& mesh, double delta);
 
   const TriMesh& mesh() const { return mesh_; }

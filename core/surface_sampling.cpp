@@ -119,9 +119,12 @@ PointLocator::PointLocator(const TriMesh& mesh) : mesh_(mesh) {
     y0_ = std::min(y0_, mesh.xyz[3 * v + 1]), y1 = std::max(y1, mesh.xyz[3 * v + 1]);
   }
   if (mesh.faces.empty()) return;
-  // About two faces per bucket.
-  const double area = std::max((x1 - x0_) * (y1 - y0_), 1e-300);
-  cell_ = std::max(std::sqrt(2.0 * area / mesh.faces.size()), 1e-9);
+  // About two faces per bucket; for a thin or flat mesh, at most 4 buckets per face along its
+  // longer side (so the bucket counts stay small whatever the shape).
+  const double faces = static_cast<double>(mesh.faces.size());
+  const double w = x1 - x0_, h = y1 - y0_;
+  cell_ = std::max({std::sqrt(2.0 * w * h / faces), std::max(w, h) / (4.0 * faces),
+                    std::numeric_limits<double>::min()});
   nx_ = std::max(1, static_cast<int>(std::ceil((x1 - x0_) / cell_)) + 1);
   ny_ = std::max(1, static_cast<int>(std::ceil((y1 - y0_) / cell_)) + 1);
   std::vector<std::pair<std::uint32_t, std::uint32_t>> entries;  // (bucket, face)
@@ -150,13 +153,18 @@ PointLocator::PointLocator(const TriMesh& mesh) : mesh_(mesh) {
 
 std::optional<PointLocator::Hit> PointLocator::locate(double x, double y, double snap) const {
   const double p[2] = {x, y};
-  const int reach = snap > 0 ? static_cast<int>(std::ceil(snap / cell_)) : 0;
-  const int ci = static_cast<int>(std::floor((x - x0_) / cell_));
-  const int cj = static_cast<int>(std::floor((y - y0_) / cell_));
+  // Bucket coordinates in 64 bits, clamped (a far or non-finite point is in no bucket).
+  auto bucket = [](double t) {
+    constexpr double kFar = 1e15;
+    return static_cast<long long>(std::floor(std::isnan(t) ? -kFar : std::clamp(t, -kFar, kFar)));
+  };
+  const long long reach = snap > 0 ? bucket(std::ceil(snap / cell_)) : 0;
+  const long long ci = bucket((x - x0_) / cell_), cj = bucket((y - y0_) / cell_);
   double best_d2 = snap * snap;
   std::optional<std::uint32_t> nearest;
-  for (int j = std::max(0, cj - reach); j <= std::min(ny_ - 1, cj + reach); ++j) {
-    for (int i = std::max(0, ci - reach); i <= std::min(nx_ - 1, ci + reach); ++i) {
+  for (long long j = std::max(0LL, cj - reach); j <= std::min<long long>(ny_ - 1, cj + reach); ++j) {
+    for (long long i = std::max(0LL, ci - reach); i <= std::min<long long>(nx_ - 1, ci + reach);
+         ++i) {
       const std::size_t b = static_cast<std::size_t>(j) * nx_ + i;
       for (std::uint32_t k = first_[b]; k < first_[b + 1]; ++k) {
         const std::uint32_t f = faces_[k];

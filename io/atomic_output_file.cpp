@@ -42,7 +42,11 @@ AtomicOutputFile::~AtomicOutputFile() {
 
 void AtomicOutputFile::commit() {
   out_.flush();
-  if (!out_) throw IoError(final_.string() + ": write failed (disk full?)");
+  if (!out_) {
+    const int err = errno;
+    throw IoError(final_.string() + ": write failed" +
+                  (err ? std::string(" (") + std::strerror(err) + ")" : std::string(" (disk full?)")));
+  }
   out_.close();
   if (out_.fail()) throw IoError(final_.string() + ": write failed on close");
   // note: fsync before rename, so a crash never leaves a renamed but empty file.

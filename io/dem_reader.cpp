@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdio>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -172,8 +173,9 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
   DemInfo dem;
   dem.path = path;
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw InputError(path + ": no such file");
-  if (std::filesystem::is_directory(path, ec))
+  const bool virtual_file = path.rfind("/vsi", 0) == 0;  // GDAL's /vsimem/, /vsizip/...
+  if (!virtual_file && !std::filesystem::exists(path, ec)) throw InputError(path + ": no such file");
+  if (!virtual_file && std::filesystem::is_directory(path, ec))
     throw InputError(path + ": is a directory, not a raster");
 
   CPLErrorReset();
@@ -185,6 +187,11 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
                      (why.empty() ? std::string() : " (" + last_gdal_error() + ")"));
   }
   if (ds->GetRasterCount() < 1) throw InputError(path + ": has no raster band");
+  if (options.band < 1 || options.band > ds->GetRasterCount()) {
+    throw InputError(path + ": has " + std::to_string(ds->GetRasterCount()) + " band" +
+                     (ds->GetRasterCount() == 1 ? "" : "s") + "; there is no band " +
+                     std::to_string(options.band));
+  }
   const int width = ds->GetRasterXSize(), height = ds->GetRasterYSize();
   if (width < 2 || height < 2) {
     throw InputError(path + ": " + std::to_string(width) + " x " + std::to_string(height) +
@@ -195,11 +202,17 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
                      " cells is too many for one piece (limit 2^32)");
   }
   if (ds->GetRasterCount() > 1) {
-    dem.notes.push_back(path + ": " + std::to_string(ds->GetRasterCount()) +
-                        " bands; using band 1");
+    dem.notes.push_back(path + ": " + std::to_string(ds->GetRasterCount()) + " bands; using band " +
+                        std::to_string(options.band) +
+                        (options.band == 1 ? " (--band picks another)" : ""));
   }
   double* gt = dem.geotransform;
   const bool has_gt = ds->GetGeoTransform(gt) == CE_None;
+  if (!has_gt && ds->GetGCPCount() > 0) {
+    throw InputError(path + ": georeferenced by " + std::to_string(ds->GetGCPCount()) +
+                     " ground control points, not a geotransform; warp it to a grid first "
+                     "(gdalwarp)");
+  }
   if (!has_gt) {
     gt[0] = 0, gt[1] = 1, gt[2] = 0, gt[3] = 0, gt[4] = 0, gt[5] = -1;
     dem.notes.push_back("warning: " + path + " has no geotransform; using 1 m cells");
@@ -208,8 +221,10 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
     if (!std::isfinite(gt[i])) throw InputError(path + ": geotransform is not finite");
   }
   if (gt[1] * gt[5] - gt[2] * gt[4] == 0.0) {
-    throw InputError(path + ": geotransform has zero cell size (" + std::to_string(gt[1]) + ", " +
-                     std::to_string(gt[5]) + ")");
+    char coefficients[128];
+    std::snprintf(coefficients, sizeof coefficients, "%.9g, %.9g, %.9g, %.9g", gt[1], gt[2],
+                  gt[4], gt[5]);
+    throw InputError(path + ": geotransform has zero cell size (" + coefficients + ")");
   }
 
   // CRS: distances and volumes must be metric; project geographic coordinates.
@@ -279,15 +294,47 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
   }
   try {
     dem.frame = core::GridFrame::from_jacobian(jac);
-  } catch (const std::invalid_argument&) {
-    throw InputError(path + ": degenerate cell geometry (zero or non-finite cell size)");
+  } catch (const std::invalid_argument& e) {
+    throw InputError(path + ": degenerate cell geometry (" + std::string(e.what()) + ")");
   }
 
-  GDALRasterBand* band = ds->GetRasterBand(1);
+  GDALRasterBand* band = ds->GetRasterBand(options.band);
+  dem.band = options.band;
+  const GDALDataType type = band->GetRasterDataType();
+  dem.type_name = GDALGetDataTypeName(type) ? GDALGetDataTypeName(type) : "unknown";
+  if (GDALDataTypeIsComplex(type) || type == GDT_Unknown) {
+    throw InputError(path + ": band " + std::to_string(dem.band) + " holds " + dem.type_name +
+                     " cells; heights must be real numbers");
+  }
   int has_nodata = 0;
-  dem.nodata = band->GetNoDataValue(&has_nodata);
+  if (type == GDT_Int64) {
+    const std::int64_t v = band->GetNoDataValueAsInt64(&has_nodata);
+    dem.nodata = static_cast<double>(v);
+  } else if (type == GDT_UInt64) {
+    const std::uint64_t v = band->GetNoDataValueAsUInt64(&has_nodata);
+    dem.nodata = static_cast<double>(v);
+  } else {
+    dem.nodata = band->GetNoDataValue(&has_nodata);
+  }
   dem.has_nodata = has_nodata != 0;
-  dem.float32 = band->GetRasterDataType() == GDT_Float32;
+  dem.float32 = type == GDT_Float32;
+  const char* pixel_type = band->GetMetadataItem("PIXELTYPE", "IMAGE_STRUCTURE");
+  dem.signed_byte = type == GDT_Byte && pixel_type && std::string(pixel_type) == "SIGNEDBYTE";
+  if (dem.signed_byte && dem.has_nodata && dem.nodata > 127) dem.nodata -= 256;
+  int has_scale = 0, has_offset = 0;
+  const double scale = band->GetScale(&has_scale), offset = band->GetOffset(&has_offset);
+  if ((has_scale && scale != 1.0) || (has_offset && offset != 0.0)) {
+    if (!std::isfinite(scale) || !std::isfinite(offset) || scale == 0.0) {
+      throw InputError(path + ": band " + std::to_string(dem.band) + " has an unusable scale (" +
+                       std::to_string(scale) + ") or offset (" + std::to_string(offset) + ")");
+    }
+    dem.scale = has_scale ? scale : 1.0;
+    dem.offset = has_offset ? offset : 0.0;
+    char note[160];
+    std::snprintf(note, sizeof note, "%s: heights = stored value x %.9g + %.9g (band scale/offset)",
+                  path.c_str(), dem.scale, dem.offset);
+    dem.notes.push_back(note);
+  }
   band->GetBlockSize(&dem.block_width, &dem.block_height);
   dem.block_width = std::max(1, dem.block_width);
   dem.block_height = std::max(1, dem.block_height);
@@ -299,7 +346,7 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
 WindowReader::WindowReader(const DemInfo& info) : info_(info), dataset_(nullptr) {
   CPLErrorReset();
   dataset_ = GDALDataset::Open(info.path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY);
-  if (!dataset_ || static_cast<GDALDataset*>(dataset_)->GetRasterCount() < 1) {
+  if (!dataset_ || static_cast<GDALDataset*>(dataset_)->GetRasterCount() < info.band) {
     if (dataset_) GDALClose(dataset_);
     throw InputError(info.path + ": cannot open it again (" + last_gdal_error() + ")");
   }
@@ -309,7 +356,7 @@ WindowReader::~WindowReader() { GDALClose(dataset_); }
 
 core::HeightGrid WindowReader::read(int col0, int row0, int width, int height,
                                     const core::Progress& progress) {
-  GDALRasterBand* band = static_cast<GDALDataset*>(dataset_)->GetRasterBand(1);
+  GDALRasterBand* band = static_cast<GDALDataset*>(dataset_)->GetRasterBand(info_.band);
   core::HeightGrid grid;
   grid.width = width;
   grid.height = height;
@@ -326,18 +373,30 @@ core::HeightGrid WindowReader::read(int col0, int row0, int width, int height,
     if (band->RasterIO(GF_Read, col0, r, width, rows, dst, width, rows, GDT_Float64, 0, 0,
                        nullptr) != CE_None) {
       throw InputError(info_.path + ": read failed at rows " + std::to_string(r) + "-" +
-                       std::to_string(next - 1) + " (" + last_gdal_error() + ")");
+                       std::to_string(next - 1) + ", truncated or damaged? (" + last_gdal_error() +
+                       ")");
     }
     r = next;
     if (progress && !progress(static_cast<double>(r - row0) / height, "read")) throw Cancelled();
   }
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const bool f32 = info_.float32;
-  const double nd = info_.nodata;
-  for (double& z : grid.z) {
+  const double nd = info_.nodata, scale = info_.scale, offset = info_.offset;
+  for (std::size_t i = 0; i < grid.z.size(); ++i) {
+    double& z = grid.z[i];
+    if (info_.signed_byte && z > 127) z -= 256;
     const bool is_nodata =
         info_.has_nodata && (f32 ? static_cast<float>(z) == static_cast<float>(nd) : z == nd);
-    if (is_nodata || !std::isfinite(z)) z = nan;
+    if (is_nodata || !std::isfinite(z)) {
+      z = nan;
+      continue;
+    }
+    z = z * scale + offset;
+    if (!(std::fabs(z) <= kMaxAbsHeight)) {
+      z = nan;
+      const long row = row0 + static_cast<long>(i / static_cast<std::size_t>(width));
+      absurd_ += row >= count_row0_ && row < count_row1_ ? 1 : 0;
+    }
   }
   return grid;
 }
@@ -358,18 +417,32 @@ core::TriMesh Dem::grid_mesh() const {
   return mesh;
 }
 
-Dem read_dem(const std::string& path, const DemReadOptions& options,
-             const core::Progress& progress) {
+std::string absurd_heights_note(const DemInfo& dem, std::size_t count) {
+  if (count == 0) return "";
+  return "warning: " + dem.path + ": " + std::to_string(count) +
+         " cells with heights beyond +-1e7 read as no-data";
+}
+
+std::string all_nodata_message(const DemInfo& dem) {
+  char nodata[48] = "";
+  if (dem.has_nodata) std::snprintf(nodata, sizeof nodata, " (no-data value %.17g)", dem.nodata);
+  return dem.path + ": band " + std::to_string(dem.band) + " is all no-data" + nodata;
+}
+
+Dem read_dem(DemInfo info, const core::Progress& progress) {
   Dem dem;
-  static_cast<DemInfo&>(dem) = open_dem(path, options);
+  static_cast<DemInfo&>(dem) = std::move(info);
   WindowReader reader(dem);
   dem.grid = reader.read(0, 0, dem.width, dem.height, progress);
   for (double z : dem.grid.z) dem.valid_cells += std::isnan(z) ? 0 : 1;
-  if (dem.valid_cells == 0) {
-    throw InputError(path + ": band 1 is all no-data" +
-                     (dem.has_nodata ? " (" + std::to_string(dem.nodata) + ")" : std::string()));
-  }
+  if (reader.absurd_cells() > 0) dem.notes.push_back(absurd_heights_note(dem, reader.absurd_cells()));
+  if (dem.valid_cells == 0) throw InputError(all_nodata_message(dem));
   return dem;
+}
+
+Dem read_dem(const std::string& path, const DemReadOptions& options,
+             const core::Progress& progress) {
+  return read_dem(open_dem(path, options), progress);
 }
 
 }  // namespace dpts::io

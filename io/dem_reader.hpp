@@ -1,8 +1,9 @@
-// Reading a DEM (band 1 of any raster GDAL opens) into a height grid, with its CRS handling.
+// Reading a DEM (one band of any raster GDAL opens) into a height grid, with its CRS handling.
 #pragma once
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -19,7 +20,13 @@ struct DemReadOptions {
   // Output CRS as GDAL understands it (EPSG:32633, a WKT, a PROJ string). Empty: keep a
   // projected CRS as it is, and project a geographic one to the UTM zone of the DEM's centre.
   std::string t_srs;
+  int band = 1;  // the raster band holding the heights (1-based)
 };
+
+// Heights beyond +-1e7 (10,000 km in metres; still beyond Everest in millimetres) are not
+// terrain in any unit a DEM uses: undeclared no-data such as -3.4e38 or 1e30. WindowReader
+// reads them as no-data and counts them.
+inline constexpr double kMaxAbsHeight = 1e7;
 
 struct TransformDeleter {
   void operator()(OGRCoordinateTransformation* t) const;
@@ -36,14 +43,22 @@ struct DemInfo {
   std::vector<std::string> notes;  // what the user should know (CRS choices, warnings)
   double metres_per_output_unit = 1.0;
   double geotransform[6] = {0, 1, 0, 0, 0, -1};
+  int band = 1;                // the band read (1-based)
+  std::string type_name;       // GDAL's name of the cell type (Int16, Float32...)
   bool has_nodata = false;
   double nodata = 0;
-  bool float32 = false;  // band type Float32: no-data compares in single precision
+  bool float32 = false;      // band type Float32: no-data compares in single precision
+  bool signed_byte = false;  // Byte band marked PIXELTYPE=SIGNEDBYTE (values -128..127)
+  double scale = 1, offset = 0;  // height = stored value * scale + offset (band metadata)
   int block_width = 0, block_height = 0;
   std::unique_ptr<OGRCoordinateTransformation, TransformDeleter> to_output;    // null: identity
   std::unique_ptr<OGRCoordinateTransformation, TransformDeleter> from_output;  // null: identity
 
   std::size_t cell_count() const { return static_cast<std::size_t>(width) * height; }
+
+  // Bytes read_dem and a whole-DEM run hold per cell of the raster (the grid, its TIN and
+  // the elimination's state), measured on real DEMs with some margin: see README.
+  static constexpr std::size_t kWholeDemBytesPerCell = 320;
 
   // Cell centres of the given cells (row-major indices) in the output CRS: x0, y0, x1, ...
   // Throws IoError if the CRS transformation fails. Not thread-safe (one transformation).
@@ -81,12 +96,12 @@ struct Dem : DemInfo {
   core::TriMesh grid_mesh() const;
 };
 
-// Opens band 1 of `path` and checks it without reading heights: throws InputError naming the
-// file (missing, not a raster, no band, too small or too large, degenerate geotransform), or
-// UsageError for a bad --t-srs. GDALAllRegister() must have been called.
+// Opens the band of `path` and checks it without reading heights: throws InputError naming the
+// file (missing, not a raster, no such band, complex cells, too small or too large, degenerate
+// geotransform), or UsageError for a bad --t-srs. GDALAllRegister() must have been called.
 DemInfo open_dem(const std::string& path, const DemReadOptions& options);
 
-// Reads windows of band 1 through its own GDAL dataset handle (GDAL handles are not
+// Reads windows of the DEM's band through its own GDAL dataset handle (GDAL handles are not
 // thread-safe: one reader per thread or task). No-data, NaN and infinite heights become NaN.
 class WindowReader {
  public:
@@ -101,16 +116,33 @@ class WindowReader {
   core::HeightGrid read(int col0, int row0, int width, int height,
                         const core::Progress& progress = nullptr);
 
+  // Cells read so far whose height was beyond kMaxAbsHeight (read as no-data), counting only
+  // rows in [row0, row1) as set by count_rows (all rows by default: windows read twice count
+  // twice; a streaming pass with overlapping strips narrows the rows to each strip's own).
+  std::size_t absurd_cells() const { return absurd_; }
+  void count_rows(int row0, int row1) { count_row0_ = row0, count_row1_ = row1; }
+
  private:
   const DemInfo& info_;
   void* dataset_;  // GDALDataset*
+  std::size_t absurd_ = 0;
+  int count_row0_ = 0, count_row1_ = std::numeric_limits<int>::max();
 };
 
-// Reads band 1 of `path`. No-data cells, NaN and infinite heights become NaN. Checks the
-// raster before reading it and throws InputError naming the file (not a raster, no band,
+// A warning for `count` cells read as no-data because of absurd heights ("" when none).
+std::string absurd_heights_note(const DemInfo& dem, std::size_t count);
+
+// The message for a DEM whose band has no valid cell, naming the file and the band.
+std::string all_nodata_message(const DemInfo& dem);
+
+// Reads the band of `path` (options.band). No-data cells, NaN, infinite and absurd heights
+// become NaN. Checks the raster before reading it and throws InputError naming the file (not a raster, no band,
 // degenerate geotransform, too large), or UsageError for a bad --t-srs. Calls progress with
 // stage "read". GDALAllRegister() must have been called.
 Dem read_dem(const std::string& path, const DemReadOptions& options,
              const core::Progress& progress);
+
+// The same for a DEM already opened (and checked) by open_dem.
+Dem read_dem(DemInfo info, const core::Progress& progress);
 
 }  // namespace dpts::io

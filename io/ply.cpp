@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -43,9 +44,15 @@ void put_number(std::string& buf, std::uint32_t v) {
   buf.append(tmp, res.ptr);
 }
 
+// "write failed (why)": errno still holds the failed write's reason (EFBIG, ENOSPC, EIO...).
+std::string write_failure() {
+  const int err = errno;
+  return std::string("write failed") + (err ? std::string(" (") + std::strerror(err) + ")" : "");
+}
+
 void flush(std::ostream& out, std::string& buf) {
   out.write(buf.data(), static_cast<std::streamsize>(buf.size()));
-  if (!out) throw IoError("write failed");
+  if (!out) throw IoError(write_failure());
   buf.clear();
 }
 
@@ -95,7 +102,7 @@ void write_ply(std::ostream& out, const Mesh& mesh, PlyFormat format) {
   }
   flush(out, buf);
   out.flush();
-  if (!out) throw IoError("write failed");
+  if (!out) throw IoError(write_failure());
 }
 
 namespace {
@@ -231,6 +238,8 @@ Mesh read_ply(std::istream& in, const std::string& name) {
       long long count = -1;
       ls >> e.name >> count;
       if (count < 0) throw InputError(name + ": bad PLY element line '" + line + "'");
+      // note: indices are 32-bit; a larger element cannot be a mesh we can use.
+      if (count > 0xffffffffLL) throw InputError(name + ": PLY element '" + e.name + "' too large");
       e.count = static_cast<std::size_t>(count);
       elements.push_back(e);
     } else if (key == "property") {
@@ -257,6 +266,18 @@ Mesh read_ply(std::istream& in, const std::string& name) {
     throw InputError(name + ": unknown PLY format '" + format + "'");
   }
   auto value = [&](Type t) { return ascii ? read_ascii(in, name) : read_binary(in, t, big, name); };
+  // A list's length: a whole number from 0 to 255 (the largest any uchar count can say; longer
+  // lists with wider count types are refused rather than trusted).
+  auto list_length = [&](Type t) {
+    const double n = value(t);
+    if (!(n >= 0 && n <= 255) || n != std::floor(n)) {
+      throw InputError(name + ": bad PLY list length " + std::to_string(n));
+    }
+    return static_cast<std::size_t>(n);
+  };
+  // Counts in the header are not trusted for allocation: a truncated or lying file fails on
+  // reading, not on reserving memory for elements it does not have.
+  constexpr std::size_t kReserveCap = std::size_t{1} << 20;
   bool seen_vertex = false;
   for (const Element& e : elements) {
     if (e.name == "vertex") {
@@ -267,13 +288,14 @@ Mesh read_ply(std::istream& in, const std::string& name) {
         if (e.props[k].name == "z") iz = static_cast<int>(k);
       }
       if (ix < 0 || iy < 0 || iz < 0) throw InputError(name + ": PLY vertices lack x, y or z");
-      mesh.xyz.resize(3 * e.count);
+      if (seen_vertex) throw InputError(name + ": PLY has two vertex elements");
+      mesh.xyz.reserve(3 * std::min(e.count, kReserveCap));
       for (std::size_t i = 0; i < e.count; ++i) {
+        mesh.xyz.resize(3 * (i + 1));
         for (std::size_t k = 0; k < e.props.size(); ++k) {
           const Property& p = e.props[k];
           if (p.is_list) {
-            const auto n = static_cast<std::size_t>(value(p.count_type));
-            for (std::size_t m = 0; m < n; ++m) value(p.type);
+            for (std::size_t m = list_length(p.count_type); m > 0; --m) value(p.type);
             continue;
           }
           const double v = value(p.type);
@@ -285,16 +307,21 @@ Mesh read_ply(std::istream& in, const std::string& name) {
       seen_vertex = true;
     } else if (e.name == "face") {
       if (!seen_vertex) throw InputError(name + ": PLY faces come before vertices");
-      mesh.faces.reserve(e.count);
+      if (!mesh.faces.empty()) throw InputError(name + ": PLY has two face elements");
+      const bool has_indices = std::any_of(e.props.begin(), e.props.end(), [](const Property& p) {
+        return p.is_list && (p.name == "vertex_indices" || p.name == "vertex_index");
+      });
+      if (!has_indices) throw InputError(name + ": PLY faces lack a vertex_indices list");
+      mesh.faces.reserve(std::min(e.count, kReserveCap));
       for (std::size_t i = 0; i < e.count; ++i) {
         for (const Property& p : e.props) {
           if (!p.is_list) {
             value(p.type);
             continue;
           }
-          const double n = value(p.count_type);
+          const std::size_t n = list_length(p.count_type);
           if (p.name != "vertex_indices" && p.name != "vertex_index") {
-            for (int m = 0; m < static_cast<int>(n); ++m) value(p.type);
+            for (std::size_t m = n; m > 0; --m) value(p.type);
             continue;
           }
           if (n != 3) throw InputError(name + ": face " + std::to_string(i) + " is not a triangle");
@@ -310,16 +337,31 @@ Mesh read_ply(std::istream& in, const std::string& name) {
           mesh.faces.push_back(f);
         }
       }
-    } else {
+    } else if (!e.props.empty()) {  // note: an element without properties has no data
       for (std::size_t i = 0; i < e.count; ++i) {
         for (const Property& p : e.props) {
-          const std::size_t n = p.is_list ? static_cast<std::size_t>(value(p.count_type)) : 1;
-          for (std::size_t m = 0; m < n; ++m) value(p.type);
+          for (std::size_t m = p.is_list ? list_length(p.count_type) : 1; m > 0; --m) value(p.type);
         }
       }
     }
   }
   return mesh;
+}
+
+void check_triangles(const Mesh& mesh, const std::string& name) {
+  if (mesh.faces.empty()) throw InputError(name + ": has no faces");
+  for (std::size_t i = 0; i < mesh.xyz.size(); ++i) {
+    if (!std::isfinite(mesh.xyz[i])) {
+      throw InputError(name + ": vertex " + std::to_string(i / 3) +
+                       " has a non-finite coordinate");
+    }
+  }
+  for (std::size_t i = 0; i < mesh.faces.size(); ++i) {
+    const auto& f = mesh.faces[i];
+    if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]) {
+      throw InputError(name + ": face " + std::to_string(i) + " repeats a vertex");
+    }
+  }
 }
 
 Mesh read_ply_file(const std::string& path) {

@@ -30,4 +30,10 @@ void write_ply(std::ostream& out, const Mesh& mesh, PlyFormat format);
 Mesh read_ply(std::istream& in, const std::string& name);
 Mesh read_ply_file(const std::string& path);
 
+// The checks a mesh must pass before its surface distances are measured: at least one face,
+// finite coordinates, three distinct vertices per face. Throws InputError naming `name`.
+// Flat (zero-area) and folded (clockwise) faces pass: they are a property of the mesh that
+// dpts-eval measures and reports, not a reason to refuse it.
+void check_triangles(const Mesh& mesh, const std::string& name);
+
 }  // namespace dpts::io

@@ -12,10 +12,13 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <limits>
 #include <mutex>
+#include <optional>
+#include <string>
 #include <stdexcept>
 
 #include "core/errors.hpp"
@@ -76,7 +79,8 @@ class SharedProgress {
 
 // One streaming pass over the raster in strips of whole rows: surface vertices per block.
 core::BlockCounts count_blocks(const io::DemInfo& dem, std::size_t strip_bytes,
-                               const core::Progress& progress, std::size_t* valid_cells) {
+                               const core::Progress& progress, std::size_t* valid_cells,
+                               std::size_t* absurd_cells) {
   core::BlockCounts bc;
   bc.width = dem.width;
   bc.height = dem.height;
@@ -98,6 +102,7 @@ core::BlockCounts count_blocks(const io::DemInfo& dem, std::size_t strip_bytes,
     const int r1 = std::min(dem.height, r0 + strip);
     // One row more on each side: whether a cell is a surface vertex depends on its neighbours.
     const int a = std::max(0, r0 - 1), b = std::min(dem.height, r1 + 1);
+    reader.count_rows(r0, r1);
     const core::HeightGrid g = reader.read(0, a, dem.width, b - a);
     for (int r = r0 - a; r < r1 - a; ++r) {
       for (int c = 0; c < g.width; ++c) *valid_cells += g.is_valid(c, r) ? 1 : 0;
@@ -110,6 +115,7 @@ core::BlockCounts count_blocks(const io::DemInfo& dem, std::size_t strip_bytes,
     }
     if (progress && !progress(static_cast<double>(r1) / dem.height, "count")) throw Cancelled();
   }
+  *absurd_cells = reader.absurd_cells();
   return bc;
 }
 
@@ -250,6 +256,51 @@ std::size_t peak_rss_kb() {
   return 0;
 }
 
+namespace {
+
+// The first number in a file (a cgroup limit or usage), or nullopt ("max", missing, unreadable).
+std::optional<double> read_number(const char* path) {
+  std::ifstream in(path);
+  double v = 0;
+  if (in >> v) return v;
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::size_t available_memory_bytes() {
+  double avail = std::numeric_limits<double>::infinity();
+  std::ifstream meminfo("/proc/meminfo");
+  std::string line;
+  while (std::getline(meminfo, line)) {
+    if (line.rfind("MemAvailable:", 0) == 0) avail = std::strtod(line.c_str() + 13, nullptr) * 1024;
+  }
+  const auto limit2 = read_number("/sys/fs/cgroup/memory.max");
+  const auto usage2 = read_number("/sys/fs/cgroup/memory.current");
+  if (limit2 && usage2) avail = std::min(avail, std::max(0.0, *limit2 - *usage2));
+  const auto limit1 = read_number("/sys/fs/cgroup/memory/memory.limit_in_bytes");
+  const auto usage1 = read_number("/sys/fs/cgroup/memory/memory.usage_in_bytes");
+  if (limit1 && usage1 && *limit1 < 1e18) avail = std::min(avail, std::max(0.0, *limit1 - *usage1));
+  return std::isfinite(avail) ? static_cast<std::size_t>(avail)
+                              : std::numeric_limits<std::size_t>::max();
+}
+
+std::string format_bytes(double bytes) {
+  char buf[32];
+  // Binary units, as --tile-mb and --max-memory count them.
+  if (bytes >= 1024.0 * (1 << 20)) {
+    std::snprintf(buf, sizeof buf, "%.1f GB", bytes / (1024.0 * (1 << 20)));
+  } else {
+    std::snprintf(buf, sizeof buf, "%.0f MB", std::ceil(bytes / (1 << 20)));
+  }
+  return buf;
+}
+
+std::size_t meta_memory_estimate(std::size_t kept_vertices, std::size_t tile_bytes,
+                                 std::size_t pieces_in_flight) {
+  return kMetaBytesPerKeptVertex * kept_vertices + tile_bytes * pieces_in_flight;
+}
+
 double piece_value(const core::HeightGrid& window, int col0, int row0, const core::GridFrame& frame,
                    int points, int max_cells, std::uint64_t seed) {
   const int w = window.width, h = window.height;
@@ -302,12 +353,12 @@ MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
   // 1. Count surface vertices per block, streaming; divide.
   auto t0 = std::chrono::steady_clock::now();
   const core::BlockCounts bc =
-      count_blocks(dem, std::max<std::size_t>(bytes / 4, 1 << 20), progress, &st.valid_cells);
+      count_blocks(dem, std::max<std::size_t>(bytes / 4, 1 << 20), progress, &st.valid_cells,
+                   &st.absurd_cells);
   st.block = bc.block;
   st.count_s = seconds_since(t0);
   if (st.valid_cells == 0) {
-    throw InputError(dem.path + ": band 1 is all no-data" +
-                     (dem.has_nodata ? " (" + std::to_string(dem.nodata) + ")" : std::string()));
+    throw InputError(io::all_nodata_message(dem));
   }
   core::DivisionOptions div;
   div.levels = options.levels;
@@ -324,6 +375,18 @@ MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
   }
   st.input_vertices = total;
   st.target_vertices = target_count(options.keep, total);
+  if (options.memory_limit_bytes > 0) {
+    const std::size_t in_flight = std::min<std::size_t>(
+        pieces.size(), static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()));
+    const std::size_t need = meta_memory_estimate(st.target_vertices, bytes, in_flight);
+    if (need > options.memory_limit_bytes) {
+      throw InputError(dem.path + ": keeping " + std::to_string(st.target_vertices) +
+                       " vertices needs about " + format_bytes(static_cast<double>(need)) +
+                       ", more than the " +
+                       format_bytes(static_cast<double>(options.memory_limit_bytes)) +
+                       " available; keep fewer (--keep, --vertices) or use a smaller --tile-mb");
+    }
+  }
   st.pieces.assign(pieces.size(), {});
   for (std::size_t i = 0; i < pieces.size(); ++i) st.pieces[i].piece = pieces[i];
 

@@ -26,7 +26,17 @@ struct MetaOptions {
   int value_points = 20;                            // l: random points per piece value
   int value_cells = 4096;  // piece values on a grid of at most this many cells
   std::uint64_t seed = 1;
+  // Refuse (InputError, with the estimate) a run estimated to need more memory; 0: no check.
+  std::size_t memory_limit_bytes = 0;
 };
+
+// Bytes the meta engine holds per kept vertex (its cell, height, outline and tail records and
+// the final triangulation), measured on real DEMs with some margin (README, memory).
+inline constexpr std::size_t kMetaBytesPerKeptVertex = 300;
+
+// The meta engine's memory estimate: kept vertices plus one tile per piece in flight.
+std::size_t meta_memory_estimate(std::size_t kept_vertices, std::size_t tile_bytes,
+                                 std::size_t pieces_in_flight);
 
 struct PieceReport {
   core::Piece piece;
@@ -39,6 +49,7 @@ struct PieceReport {
 struct MetaStats {
   std::size_t input_vertices = 0, target_vertices = 0, kept_vertices = 0;
   std::size_t valid_cells = 0;
+  std::size_t absurd_cells = 0;  // heights beyond io::kMaxAbsHeight, read as no-data
   int block = 0;
   std::vector<PieceReport> pieces;
   // Wall time per stage.
@@ -64,6 +75,13 @@ MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
 
 // Peak resident memory of this process so far in kB (Linux VmHWM), 0 where unknown.
 std::size_t peak_rss_kb();
+
+// Memory this process may still use, in bytes: the system's MemAvailable, or less when a
+// cgroup (v2 memory.max, v1 limit_in_bytes) limits it; SIZE_MAX where unknown.
+std::size_t available_memory_bytes();
+
+// "12.3 GB" / "456 MB": a byte count for messages.
+std::string format_bytes(double bytes);
 
 // The piece value of the paper's CalcPieceValue on a window of heights: the mean ED/GD over
 // all pairs of `points` random points in the footprint (seeded), GD on the Steiner graph of

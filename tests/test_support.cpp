@@ -4,11 +4,15 @@
 #include <fcntl.h>
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <chrono>
+#include <csignal>
+#include <thread>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -65,7 +69,8 @@ std::string slurp(const std::filesystem::path& p) {
 }
 }  // namespace
 
-RunResult run(const std::string& exe, const std::vector<std::string>& args) {
+RunResult run(const std::string& exe, const std::vector<std::string>& args,
+              const RunOptions& options) {
   TempDir io;
   const auto out_path = io / "stdout", err_path = io / "stderr";
   const pid_t pid = ::fork();
@@ -74,6 +79,11 @@ RunResult run(const std::string& exe, const std::vector<std::string>& args) {
     const int err = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
     ::dup2(out, 1);
     ::dup2(err, 2);
+    if (options.file_size_limit > 0) {
+      ::signal(SIGXFSZ, SIG_IGN);  // kept across exec: writes fail with EFBIG instead
+      const rlimit limit{options.file_size_limit, options.file_size_limit};
+      ::setrlimit(RLIMIT_FSIZE, &limit);
+    }
     std::vector<char*> argv;
     argv.push_back(const_cast<char*>(exe.c_str()));
     for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
@@ -82,7 +92,24 @@ RunResult run(const std::string& exe, const std::vector<std::string>& args) {
     ::_exit(127);
   }
   int status = 0;
-  ::waitpid(pid, &status, 0);
+  const bool interrupt = !options.signal_when.empty() || options.signal_after_s > 0;
+  if (interrupt) {
+    const auto start = std::chrono::steady_clock::now();
+    bool sent = false;
+    while (::waitpid(pid, &status, WNOHANG) == 0) {
+      const double t =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      if (!sent && ((!options.signal_when.empty() &&
+                     slurp(err_path).find(options.signal_when) != std::string::npos) ||
+                    (options.signal_after_s > 0 && t >= options.signal_after_s))) {
+        ::kill(pid, options.signal);
+        sent = true;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  } else {
+    ::waitpid(pid, &status, 0);
+  }
   RunResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   r.out = slurp(out_path);
@@ -110,6 +137,63 @@ void write_geotiff(const std::filesystem::path& path, const core::HeightGrid& gr
     throw std::runtime_error("cannot write " + path.string());
   }
   GDALClose(ds);
+}
+
+void write_raster(const std::filesystem::path& path, const core::HeightGrid& grid,
+                  const RasterSpec& spec) {
+  GDALAllRegister();
+  const GDALDataType type = GDALGetDataTypeByName(spec.type.c_str());
+  if (type == GDT_Unknown) throw std::runtime_error("unknown GDAL type " + spec.type);
+  GDALDriver* mem = GetGDALDriverManager()->GetDriverByName("MEM");
+  GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
+  std::vector<const char*> opts;
+  for (const auto& o : spec.creation_options) opts.push_back(o.c_str());
+  opts.push_back(nullptr);
+  GDALDataset* ds = mem->Create("", grid.width, grid.height, spec.bands, type, nullptr);
+  if (!ds) throw std::runtime_error("cannot create a MEM raster of " + spec.type);
+  std::vector<double> gt = spec.geotransform;
+  ds->SetGeoTransform(gt.data());
+  if (!spec.wkt.empty()) ds->SetProjection(spec.wkt.c_str());
+  const bool signed_byte =
+      type == GDT_Byte && std::find(spec.creation_options.begin(), spec.creation_options.end(),
+                                    "PIXELTYPE=SIGNEDBYTE") != spec.creation_options.end();
+  for (int b = 1; b <= spec.bands; ++b) {
+    GDALRasterBand* band = ds->GetRasterBand(b);
+    if (spec.has_nodata && type == GDT_Int64) {
+      band->SetNoDataValueAsInt64(static_cast<std::int64_t>(spec.nodata));
+    } else if (spec.has_nodata && type == GDT_UInt64) {
+      band->SetNoDataValueAsUInt64(static_cast<std::uint64_t>(spec.nodata));
+    } else if (spec.has_nodata) {
+      band->SetNoDataValue(spec.nodata);
+    }
+    if (spec.scale != 1.0) band->SetScale(spec.scale);
+    if (spec.offset != 0.0) band->SetOffset(spec.offset);
+    std::vector<double> values(grid.z.size());
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      const double z = grid.z[i];
+      values[i] = std::isnan(z) && spec.has_nodata ? spec.nodata : z + 1000.0 * (b - 1);
+      if (signed_byte && values[i] < 0) values[i] += 256;  // stored as two's complement
+    }
+    if (band->RasterIO(GF_Write, 0, 0, grid.width, grid.height, values.data(), grid.width,
+                       grid.height, GDT_Float64, 0, 0) != CE_None) {
+      throw std::runtime_error("cannot write band " + std::to_string(b));
+    }
+  }
+  GDALDataset* out = gtiff->CreateCopy(path.c_str(), ds, FALSE, const_cast<char**>(opts.data()),
+                                       nullptr, nullptr);
+  GDALClose(ds);
+  if (!out) throw std::runtime_error("cannot write " + path.string());
+  GDALClose(out);
+}
+
+std::string epsg_wkt(int code) {
+  OGRSpatialReference srs;
+  srs.importFromEPSG(code);
+  char* wkt = nullptr;
+  srs.exportToWkt(&wkt);
+  std::string out = wkt;
+  CPLFree(wkt);
+  return out;
 }
 
 std::vector<double> grid_xy(const core::HeightGrid& grid, const core::Tin& tin) {

@@ -32,14 +32,43 @@ struct RunResult {
   std::string out, err;
 };
 
-// Runs an executable with arguments (no shell), capturing stdout and stderr.
-RunResult run(const std::string& exe, const std::vector<std::string>& args);
+// How to run a child: limits and an interruption.
+struct RunOptions {
+  std::size_t file_size_limit = 0;  // RLIMIT_FSIZE in bytes (0: none); SIGXFSZ ignored, so a
+                                    // write past it fails like one to a full disk
+  std::string signal_when;          // send `signal` once stderr contains this text...
+  double signal_after_s = 0;        // ...or once this many seconds have passed (0: never)
+  int signal = 15;                  // SIGTERM
+};
 
-// Writes a single-band GeoTIFF (Float32, or Int16 when int16 is true) of the grid; NaN
-// cells get the nodata value. geotransform and wkt as GDAL takes them (wkt may be empty).
+// Runs an executable with arguments (no shell), capturing stdout and stderr.
+RunResult run(const std::string& exe, const std::vector<std::string>& args,
+              const RunOptions& options = {});
+
+// Writes a single-band Float32 GeoTIFF of the grid; NaN cells get the nodata value.
+// geotransform and wkt as GDAL takes them (wkt may be empty).
 void write_geotiff(const std::filesystem::path& path, const core::HeightGrid& grid,
                    const std::vector<double>& geotransform, const std::string& wkt,
                    double nodata = -9999.0);
+
+// Any GeoTIFF: cell type by GDAL name, bands (each the grid's values plus 1000 x its band
+// index - 1), no-data (NaN cells get it; without one they are written as NaN), creation
+// options (e.g. PIXELTYPE=SIGNEDBYTE), band scale and offset.
+struct RasterSpec {
+  std::string type = "Float32";
+  int bands = 1;
+  std::vector<double> geotransform = {0, 1, 0, 0, 0, -1};
+  std::string wkt;
+  bool has_nodata = false;
+  double nodata = 0;
+  std::vector<std::string> creation_options;
+  double scale = 1, offset = 0;
+};
+void write_raster(const std::filesystem::path& path, const core::HeightGrid& grid,
+                  const RasterSpec& spec);
+
+// WKT of an EPSG code.
+std::string epsg_wkt(int code);
 
 // Grid positions (col, row) of a TIN's vertices, for footprint checks.
 std::vector<double> grid_xy(const core::HeightGrid& grid, const core::Tin& tin);

@@ -1,6 +1,7 @@
 // dpts-eval as users run it: figures, JSON, exit codes.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <algorithm>
 #include <fstream>
 #include <limits>
 
@@ -63,4 +64,58 @@ TEST_CASE("dpts-eval refuses bad usage with exit 2 and bad meshes with exit 1", 
   const auto junk = test::run(kEval, {"--dem", fx.dem, "--mesh", (fx.dir / "junk.ply").string()});
   CHECK(junk.exit_code == 1);
   CHECK(junk.err.find("junk.ply") != std::string::npos);
+}
+
+TEST_CASE("dpts-eval answers each malformed mesh clearly", "[cli][eval][robust]") {
+  Fixture fx;
+  // A valid mesh of the DEM to start from: 3 x 3 vertices at cell centres, 8 faces.
+  const std::string head = "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\n"
+                           "property double y\nproperty double z\nelement face 2\n"
+                           "property list uchar int vertex_indices\nend_header\n";
+  const std::string square = "400005 3799995 300\n400235 3799995 300\n400235 3799825 300\n"
+                             "400005 3799825 300\n";
+  struct Case {
+    std::string what, text;
+    int exit_code;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {"truncated", head + square + "3 0 2 1\n3 0", 1, "truncated PLY data"},
+      {"fewer vertices than the header says", head + "400005 3799995 300\n3 0 2 1\n", 1,
+       "truncated PLY data"},
+      {"face index out of range", head + square + "3 0 2 1\n3 0 3 7\n", 1,
+       "face 1 has vertex index out of range"},
+      {"a quad", head + square + "4 0 3 2 1\n3 0 2 1\n", 1, "face 0 is not a triangle"},
+      {"NaN coordinate", head + "nan 3799995 300\n" + square.substr(square.find('\n') + 1) +
+                             "3 0 2 1\n3 0 3 2\n",
+       1, "vertex 0 has a non-finite coordinate"},
+      {"face repeating a vertex", head + square + "3 0 2 1\n3 0 0 2\n", 1,
+       "face 1 repeats a vertex"},
+      {"negative list length", head + square + "3 0 2 1\n-3 0 3 2\n", 1, "bad PLY list length"},
+      {"vertices outside the DEM", head + "0 0 300\n1 0 300\n1 1 300\n0 1 300\n3 0 1 2\n3 0 2 3\n",
+       1, "vertex 0 (0.000000, 0.000000) lies outside"},
+      {"no faces", "ply\nformat ascii 1.0\nelement vertex 1\nproperty double x\nproperty double y\n"
+                   "property double z\nend_header\n400005 3799995 300\n",
+       1, "has no faces"},
+      // Documented treatment: folded and flat faces are measured and reported, not refused.
+      {"a folded face", head + square + "3 0 2 1\n3 0 2 3\n", 0, ""},
+      {"a flat face",
+       "ply\nformat ascii 1.0\nelement vertex 5\nproperty double x\nproperty double y\n"
+       "property double z\nelement face 3\nproperty list uchar int vertex_indices\nend_header\n" +
+           square + "400120 3799995 300\n3 0 2 1\n3 0 3 2\n3 0 4 1\n",
+       0, ""},
+  };
+  for (const auto& c : cases) {
+    INFO(c.what);
+    const auto mesh = (fx.dir / "m.ply").string();
+    std::ofstream(mesh, std::ios::trunc) << c.text;
+    const auto r = test::run(kEval, {"--json", "--quiet", "--dem", fx.dem, "--mesh", mesh});
+    CHECK(r.exit_code == c.exit_code);
+    if (c.exit_code != 0) {
+      CHECK(r.err.rfind("dpts-eval: error: " + mesh + ": " + c.message, 0) == 0);
+      CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    } else {
+      CHECK(r.out.find("\"faces_not_ccw\":1") != std::string::npos);
+    }
+  }
 }

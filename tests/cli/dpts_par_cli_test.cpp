@@ -3,11 +3,14 @@
 #include <ogr_spatialref.h>
 
 #include <catch2/catch.hpp>
+#include <chrono>
+#include <csignal>
 #include <cmath>
 #include <fstream>
 #include <limits>
 #include <sstream>
 
+#include "core/mesh_check.hpp"
 #include "io/ply.hpp"
 #include "test_support.hpp"
 
@@ -203,4 +206,68 @@ TEST_CASE("help and version exit 0 on stdout", "[cli]") {
   const auto v = test::run(kExe, {"--version"});
   CHECK(v.exit_code == 0);
   CHECK(v.out.rfind("dpts-par 0.1.0", 0) == 0);
+}
+
+TEST_CASE("SIGTERM and SIGINT stop a long run promptly, leaving no output and no temporary file",
+          "[cli][robust]") {
+  test::TempDir dir;
+  const auto dem = (dir / "big.tif").string();
+  test::write_geotiff(dem, test::make_grid(900, 900, [](int c, int r) {
+                        return 500.0 + 40.0 * std::sin(c * 0.05) * std::cos(r * 0.07) + 0.1 * r;
+                      }),
+                      {400000, 10, 0, 3800000, 0, -10}, test::epsg_wkt(32611));
+  const auto out = (dir / "out.ply").string();
+  std::ofstream(out) << "precious";  // an older result: must survive the interrupted run
+  for (const auto& [algo, sig] : {std::pair<std::string, int>{"vp", SIGTERM},
+                                  {"vp-meta", SIGTERM}, {"vp", SIGINT}}) {
+    INFO(algo << ", signal " << sig);
+    test::RunOptions ro;
+    ro.signal_when = "simplify";  // progress shows once the run has lasted a second
+    ro.signal_after_s = 30;
+    ro.signal = sig;
+    const auto start = std::chrono::steady_clock::now();
+    const auto r = test::run(kExe, {"--algo", algo, "--threads", "2", dem, out}, ro);
+    const double secs =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    CHECK(r.exit_code == 1);
+    CHECK(r.err.find("dpts-par: interrupted; no output written") != std::string::npos);
+    CHECK(secs < 25);
+    CHECK(dir.files() == std::vector<std::string>{"big.tif", "out.ply"});
+    std::ifstream in(out);
+    std::string s;
+    std::getline(in, s);
+    CHECK(s == "precious");
+  }
+}
+
+TEST_CASE("a rotated DEM's vertices are its cell centres and its TIN covers its footprint",
+          "[cli][robust]") {
+  test::TempDir dir;
+  const auto dem = (dir / "rotated.tif").string();
+  const int w = 25, h = 18;
+  // Cells 10 m square, rotated by atan(6/8) (about 36.9 degrees).
+  const std::vector<double> gt = {400000, 8, 6, 3800000, 6, -8};
+  test::write_geotiff(dem, test::make_grid(w, h, [](int c, int r) {
+                        return 100.0 + 20.0 * std::sin(0.3 * c) + 2.0 * r;
+                      }),
+                      gt, test::epsg_wkt(32611));
+  const auto out = (dir / "out.ply").string();
+  for (const std::string algo : {"vp", "vp-meta", "qslim"}) {
+    INFO(algo);
+    REQUIRE(test::run(kExe, {"--algo", algo, "--tile-mb", "1", dem, out}).exit_code == 0);
+    const io::Mesh mesh = io::read_ply_file(out);
+    // Inverse geotransform: each vertex of vp and vp-meta lies on a cell centre.
+    const double det = gt[1] * gt[5] - gt[2] * gt[4];
+    for (std::size_t v = 0; v < mesh.vertex_count() && algo != "qslim"; ++v) {
+      const double dx = mesh.xyz[3 * v] - gt[0], dy = mesh.xyz[3 * v + 1] - gt[3];
+      const double col = (gt[5] * dx - gt[2] * dy) / det - 0.5;
+      const double row = (-gt[4] * dx + gt[1] * dy) / det - 0.5;
+      CHECK(std::fabs(col - std::round(col)) < 1e-6);
+      CHECK(std::fabs(row - std::round(row)) < 1e-6);
+    }
+    const core::MeshCheck mc = core::check_mesh(core::xy_of(mesh.xyz), mesh.faces);
+    CHECK(mc.clockwise_or_flat == 0);
+    CHECK(mc.bad_edges == 0);
+    CHECK(mc.area == Approx((w - 1) * (h - 1) * std::fabs(det)).epsilon(1e-9));
+  }
 }

@@ -16,14 +16,9 @@ using namespace dpts;
 
 namespace {
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
-std::string epsg_wkt(int code) {
-  OGRSpatialReference srs;
-  srs.importFromEPSG(code);
-  char* wkt = nullptr;
-  srs.exportToWkt(&wkt);
-  std::string out = wkt;
-  CPLFree(wkt);
-  return out;
+using test::epsg_wkt;
+double zat(const core::HeightGrid& g, int c, int r) {
+  return g.z[static_cast<std::size_t>(r) * g.width + c];
 }
 }  // namespace
 
@@ -97,4 +92,75 @@ TEST_CASE("bad rasters are refused naming the file", "[io][dem]") {
   test::write_geotiff(dir / "void.tif", g, {0, 1, 0, 0, 0, -1}, "");
   CHECK_THROWS_WITH(io::read_dem((dir / "void.tif").string(), {}, nullptr),
                     Catch::Contains("void.tif") && Catch::Contains("all no-data"));
+}
+
+TEST_CASE("every real cell type is read exactly, with scale, offset and signed bytes", "[io][dem]") {
+  GDALAllRegister();
+  test::TempDir dir;
+  const auto g = test::make_grid(6, 5, [](int c, int r) { return 10.0 * r + c; });
+  for (const char* type : {"Byte", "UInt16", "Int16", "UInt32", "Int32", "UInt64", "Int64",
+                           "Float32", "Float64"}) {
+    INFO(type);
+    test::RasterSpec spec;
+    spec.type = type;
+    spec.has_nodata = true;
+    spec.nodata = 12;  // the cell (2, 1) becomes no-data
+    test::write_raster(dir / "t.tif", g, spec);
+    const io::Dem dem = io::read_dem((dir / "t.tif").string(), {}, nullptr);
+    CHECK(dem.type_name == type);
+    CHECK(std::isnan(zat(dem.grid, 2, 1)));
+    CHECK(dem.valid_cells == 29);
+    CHECK(zat(dem.grid, 5, 4) == 45.0);
+    CHECK(zat(dem.grid, 0, 0) == 0.0);
+  }
+  // Int8 as GDAL 3.6 stores it: Byte marked PIXELTYPE=SIGNEDBYTE.
+  test::RasterSpec sbyte;
+  sbyte.type = "Byte";
+  sbyte.creation_options = {"PIXELTYPE=SIGNEDBYTE"};
+  test::write_raster(dir / "s.tif", test::make_grid(3, 3, [](int c, int r) { return -100.0 + 3 * r + c; }),
+                     sbyte);
+  const io::Dem s = io::read_dem((dir / "s.tif").string(), {}, nullptr);
+  CHECK(s.signed_byte);
+  CHECK(zat(s.grid, 0, 0) == -100.0);
+  CHECK(zat(s.grid, 2, 2) == -92.0);
+  // Heights stored in centimetres: value x 0.01 + 100.
+  test::RasterSpec scaled;
+  scaled.type = "Int32";
+  scaled.scale = 0.01;
+  scaled.offset = 100;
+  test::write_raster(dir / "cm.tif", test::make_grid(3, 3, [](int c, int r) { return 250.0 * (r * 3 + c); }),
+                     scaled);
+  const io::Dem cm = io::read_dem((dir / "cm.tif").string(), {}, nullptr);
+  CHECK(zat(cm.grid, 1, 0) == Approx(102.5).epsilon(1e-12));
+  CHECK(zat(cm.grid, 2, 2) == Approx(120.0).epsilon(1e-12));
+  REQUIRE_FALSE(cm.notes.empty());
+  CHECK(cm.notes.back().find("heights = stored value x 0.01 + 100") != std::string::npos);
+}
+
+TEST_CASE("another band, absurd and non-finite heights", "[io][dem]") {
+  GDALAllRegister();
+  test::TempDir dir;
+  test::RasterSpec two;
+  two.bands = 2;  // band 2 = band 1 + 1000
+  const auto g = test::make_grid(4, 4, [](int c, int r) {
+    if (c == 1 && r == 1) return std::numeric_limits<double>::infinity();
+    if (c == 2 && r == 1) return -3.4e38;  // an undeclared Float32 no-data
+    if (c == 3 && r == 1) return kNaN;
+    return double(c + r);
+  });
+  test::write_raster(dir / "b.tif", g, two);
+  io::DemReadOptions second;
+  second.band = 2;
+  const io::Dem dem = io::read_dem((dir / "b.tif").string(), second, nullptr);
+  CHECK(dem.band == 2);
+  CHECK(zat(dem.grid, 0, 0) == 1000.0);
+  CHECK(std::isnan(zat(dem.grid, 1, 1)));
+  CHECK(std::isnan(zat(dem.grid, 2, 1)));
+  CHECK(std::isnan(zat(dem.grid, 3, 1)));
+  CHECK(dem.valid_cells == 13);
+  const io::Dem first = io::read_dem((dir / "b.tif").string(), {}, nullptr);
+  REQUIRE(first.notes.size() == 3);  // two bands, no CRS, one absurd height
+  CHECK(first.notes[0].find("2 bands; using band 1") != std::string::npos);
+  CHECK(first.notes[2].find("1 cells with heights beyond +-1e7 read as no-data") !=
+        std::string::npos);
 }

@@ -2,6 +2,7 @@
 #include "io/ply.hpp"
 
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <sstream>
 
 #include "core/errors.hpp"
@@ -74,4 +75,46 @@ TEST_CASE("malformed PLY is refused with a message naming the file", "[io][ply]"
   CHECK_THROWS_WITH(io::read_ply(quad, "q.ply"), Catch::Contains("not a triangle"));
   std::stringstream text("hello\n");
   CHECK_THROWS_AS(io::read_ply(text, "x.ply"), InputError);
+}
+
+TEST_CASE("PLY headers are not trusted: lying counts fail on reading, not on allocating",
+          "[io][ply]") {
+  // 2^32 - 1 vertices announced, none given: refused as truncated without reserving 100 GB.
+  std::stringstream huge(
+      "ply\nformat binary_little_endian 1.0\nelement vertex 4294967295\nproperty double x\n"
+      "property double y\nproperty double z\nend_header\n");
+  CHECK_THROWS_WITH(io::read_ply(huge, "h.ply"), Catch::Contains("truncated"));
+  std::stringstream too_many(
+      "ply\nformat ascii 1.0\nelement vertex 4294967296\nproperty double x\nend_header\n");
+  CHECK_THROWS_WITH(io::read_ply(too_many, "t.ply"), Catch::Contains("too large"));
+  // An element without properties holds no data, whatever its count: no endless loop.
+  std::stringstream empty_element(
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+      "property double z\nelement junk 4000000000\nend_header\n0 0 0\n1 0 0\n0 1 0\n");
+  CHECK(io::read_ply(empty_element, "e.ply").vertex_count() == 3);
+  // List lengths must be whole numbers from 0 to 255.
+  std::stringstream fractional(
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+      "property double z\nelement face 1\nproperty list float int vertex_indices\nend_header\n"
+      "0 0 0\n1 0 0\n0 1 0\n2.5 0 1 2\n");
+  CHECK_THROWS_WITH(io::read_ply(fractional, "f.ply"), Catch::Contains("bad PLY list length"));
+  std::stringstream no_indices(
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+      "property double z\nelement face 2000000000\nend_header\n0 0 0\n1 0 0\n0 1 0\n");
+  CHECK_THROWS_WITH(io::read_ply(no_indices, "n.ply"), Catch::Contains("vertex_indices"));
+}
+
+TEST_CASE("check_triangles refuses what no distance can be measured on", "[io][ply]") {
+  io::Mesh m = sample_mesh();
+  CHECK_NOTHROW(io::check_triangles(m, "m.ply"));
+  io::Mesh repeat = m;
+  repeat.faces[0][2] = repeat.faces[0][0];
+  CHECK_THROWS_WITH(io::check_triangles(repeat, "m.ply"), "m.ply: face 0 repeats a vertex");
+  io::Mesh nan = m;
+  nan.xyz[4] = std::nan("");
+  CHECK_THROWS_WITH(io::check_triangles(nan, "m.ply"),
+                    "m.ply: vertex 1 has a non-finite coordinate");
+  io::Mesh none = m;
+  none.faces.clear();
+  CHECK_THROWS_WITH(io::check_triangles(none, "m.ply"), "m.ply: has no faces");
 }
