@@ -3,7 +3,9 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <charconv>
+#include <iterator>
 #include <cstdio>
 #include <iostream>
 
@@ -14,6 +16,7 @@ namespace {}  // namespace
 
 std::string par_help() {
   return R"(usage: dpts-par [options] INPUT OUTPUT
+       dpts-par --batch LIST|DIR --out-dir OUT [--jobs N] [options]
 
 Simplifies a DEM (a band of any raster GDAL reads) into a TIN that preserves surface
 (geodesic) distances, by Delaunay vertex elimination, and writes it as PLY.
@@ -43,10 +46,20 @@ Simplifies a DEM (a band of any raster GDAL reads) into a TIN that preserves sur
   --band B             the band holding the heights (default 1)
   --max-memory MB      refuse, before reading the heights, a run estimated to need more
                        memory than MB (default: the memory available when it starts)
+  --report FILE.json   write a JSON report of the run (input, options, output with its
+                       sha256, per-stage wall and CPU times, peak memory, pieces), also
+                       when it fails
   --ascii              write ASCII PLY (default: binary little-endian)
   --config KEY VALUE   set a GDAL configuration option
   --quiet              no progress or summary on stderr (warnings still show)
   --help, --version
+
+Batch mode: dpts-par --batch LIST|DIR --out-dir OUT [--jobs N] [options]
+  simplifies every raster of folder DIR (or every path listed in file LIST, one per line)
+  into OUT/NAME.ply with OUT/NAME.json reports, and writes OUT/batch-summary.json. A failed
+  input is recorded and the batch goes on. Run it again to resume: inputs whose report says
+  ok for the same input (size, modification time) and options are skipped. --jobs N runs N
+  inputs at once, sharing --threads between them. Exit 0 only when every input is done.
 
 Every valid cell centre is a vertex; no-data, NaN, infinite and absurd (beyond +-1e7)
 heights are not, and no face covers a void or leaves the valid data. Heights are the
@@ -61,6 +74,7 @@ ParOptions parse_par(const std::vector<std::string>& args) {
   std::vector<std::string> positional;
   bool keep_seen = false, vertices_seen = false;
   for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::size_t first = i;
     std::string arg = args[i];
     std::string value;
     bool has_inline = false;
@@ -143,6 +157,17 @@ ParOptions parse_par(const std::vector<std::string>& args) {
       o.band = parse_number<int>(arg, need(arg), 1, "an integer >= 1");
     } else if (arg == "--max-memory") {
       o.max_memory_mb = parse_number<std::size_t>(arg, need(arg), 1, "an integer >= 1 (MB)");
+    } else if (arg == "--report") {
+      o.report = need(arg);
+      if (o.report.empty()) throw UsageError("--report: expected a file name");
+    } else if (arg == "--batch") {
+      o.batch = need(arg);
+      if (o.batch.empty()) throw UsageError("--batch: expected a folder or a list file");
+    } else if (arg == "--out-dir") {
+      o.out_dir = need(arg);
+      if (o.out_dir.empty()) throw UsageError("--out-dir: expected a folder");
+    } else if (arg == "--jobs") {
+      o.jobs = parse_number<int>(arg, need(arg), 1, "an integer >= 1");
     } else if (arg == "--ascii") {
       o.ascii = true;
     } else if (arg == "--quiet" || arg == "-q") {
@@ -155,11 +180,26 @@ ParOptions parse_par(const std::vector<std::string>& args) {
       throw UsageError(arg + ": unknown option");
     } else {
       positional.push_back(arg);
+      continue;
+    }
+    static const char* batch_only[] = {"--batch", "--out-dir", "--jobs", "--threads",
+                                       "--max-memory", "--report", "--quiet", "-q"};
+    if (std::find(std::begin(batch_only), std::end(batch_only), arg) == std::end(batch_only)) {
+      o.child_args.insert(o.child_args.end(), args.begin() + static_cast<long>(first),
+                          args.begin() + static_cast<long>(i) + 1);
     }
   }
   if (o.help || o.version) return o;
   if (keep_seen && vertices_seen) throw UsageError("--keep and --vertices: give one, not both");
   if (!keep_seen && !vertices_seen) o.keep.percent = 10.0;
+  if (!o.batch.empty() || !o.out_dir.empty()) {
+    if (o.batch.empty()) throw UsageError("--out-dir: needs --batch");
+    if (o.out_dir.empty()) throw UsageError("--batch: needs --out-dir");
+    if (!o.report.empty()) throw UsageError("--report: a batch writes one report per input");
+    if (!positional.empty()) throw UsageError("unexpected argument '" + positional[0] + "' with --batch");
+    return o;
+  }
+  if (o.jobs != 1) throw UsageError("--jobs: needs --batch");
   if (positional.size() != 2) {
     throw UsageError(positional.size() < 2 ? "expected INPUT and OUTPUT"
                                            : "unexpected argument '" + positional[2] + "'");

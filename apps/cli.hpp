@@ -32,6 +32,12 @@ struct ParOptions {
   std::string t_srs;
   int band = 1;
   std::size_t max_memory_mb = 0;  // 0: the memory available when the run starts
+  std::string report;             // --report FILE.json
+  std::string batch, out_dir;     // --batch LIST|DIR --out-dir OUT
+  int jobs = 1;                   // --jobs N: batch inputs at once
+  // The arguments a batch passes on to each child: every option that is not about the batch
+  // (--batch, --out-dir, --jobs), its threads, memory or report.
+  std::vector<std::string> child_args;
   bool ascii = false;
   bool quiet = false;
   bool help = false;

@@ -20,6 +20,7 @@
 #include "core/mesh_check.hpp"
 #include "core/surface_sampling.hpp"
 #include "io/dem_reader.hpp"
+#include "io/json.hpp"
 #include "io/ply.hpp"
 #include "parallel/evaluate.hpp"
 
@@ -105,26 +106,6 @@ Options parse(const std::vector<std::string>& args) {
     throw UsageError("expected --dem DEM and --mesh MESH.ply");
   }
   return o;
-}
-
-std::string json_number(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
-}
-
-std::string json_string(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) {
-      out += ' ';
-      continue;
-    }
-    out += c;
-  }
-  return out + "\"";
 }
 
 int run(const Options& o) {
@@ -239,23 +220,23 @@ int run(const Options& o) {
   }
   if (o.json) {
     std::ostringstream js;
-    js << "{\"distance_error\":" << json_number(r.distance_error) << ",\"distance_error_sets\":[";
+    js << "{\"distance_error\":" << io::json_number(r.distance_error) << ",\"distance_error_sets\":[";
     for (std::size_t i = 0; i < r.set_errors.size(); ++i)
-      js << (i ? "," : "") << json_number(r.set_errors[i]);
-    js << "],\"vertical_rmse\":" << json_number(rmse) << ",\"vertical_max\":" << json_number(vmax)
+      js << (i ? "," : "") << io::json_number(r.set_errors[i]);
+    js << "],\"vertical_rmse\":" << io::json_number(rmse) << ",\"vertical_max\":" << io::json_number(vmax)
        << ",\"mesh_vertices\":" << s.vertex_count() << ",\"mesh_faces\":" << s.faces.size()
        << ",\"dem_vertices\":" << t.vertex_count() << ",\"dem_faces\":" << t.faces.size()
        << ",\"points\":" << eo.points << ",\"sets\":" << eo.sets << ",\"seed\":" << eo.seed
-       << ",\"delta_m\":" << json_number(r.delta_m) << ",\"steiner_nodes_dem\":" << r.original_nodes
+       << ",\"delta_m\":" << io::json_number(r.delta_m) << ",\"steiner_nodes_dem\":" << r.original_nodes
        << ",\"steiner_nodes_mesh\":" << r.simplified_nodes << ",\"snapped_points\":" << r.snapped
        << ",\"faces_not_ccw\":" << mc.clockwise_or_flat << ",\"bad_edges\":" << mc.bad_edges
        << ",\"faces_over_nodata\":" << over_nodata
-       << ",\"coverage\":" << json_number(mc.area / footprint_area)
+       << ",\"coverage\":" << io::json_number(mc.area / footprint_area)
        << ",\"cells_outside_mesh\":" << uncovered << ",\"threads\":" << threads
-       << ",\"dem\":" << json_string(o.dem) << ",\"mesh\":" << json_string(o.mesh)
-       << ",\"seconds_geodesics_dem\":" << json_number(r.original_s)
-       << ",\"seconds_geodesics_mesh\":" << json_number(r.simplified_s)
-       << ",\"seconds\":" << json_number(secs) << "}";
+       << ",\"dem\":" << io::json_string(o.dem) << ",\"mesh\":" << io::json_string(o.mesh)
+       << ",\"seconds_geodesics_dem\":" << io::json_number(r.original_s)
+       << ",\"seconds_geodesics_mesh\":" << io::json_number(r.simplified_s)
+       << ",\"seconds\":" << io::json_number(secs) << "}";
     std::cout << js.str() << "\n";
   }
   return 0;

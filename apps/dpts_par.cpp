@@ -12,7 +12,9 @@
 #include <filesystem>
 #include <iostream>
 
+#include "apps/batch.hpp"
 #include "apps/cli.hpp"
+#include "apps/report.hpp"
 #include "core/errors.hpp"
 #include "core/mesh_check.hpp"
 #include "core/qslim.hpp"
@@ -68,7 +70,19 @@ dpts::io::Dem read_whole_dem(const dpts::cli::ParOptions& o, std::size_t bytes_p
   return io::read_dem(std::move(info), progress);
 }
 
+dpts::cli::RunReport g_report;  // --report: filled as the run goes, written by main()
+
+// Records the output in the report (after it was committed).
+void record_output(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem,
+                   std::size_t valid_cells, std::size_t surface, std::size_t kept,
+                   std::size_t faces) {
+  if (g_report.path.empty()) return;
+  g_report.input_json = dpts::cli::input_json(dem, valid_cells, surface);
+  g_report.output_json = dpts::cli::output_json(o.output, kept, faces);
+}
+
 void print_notes(const dpts::io::DemInfo& dem, const dpts::cli::ParOptions& o) {
+  if (!g_report.path.empty()) g_report.input_json = dpts::cli::input_json(dem, 0, 0);
   for (const std::string& note : dem.notes) {
     if (!o.quiet || note.rfind("warning", 0) == 0) std::cerr << "dpts-par: " << note << "\n";
   }
@@ -112,6 +126,7 @@ void write_mesh(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem, dp
   mesh.comments.push_back(generated + " from " +
                           std::filesystem::path(o.input).filename().string());
   mesh.comments.push_back("crs " + (dem.output_wkt.empty() ? std::string("none") : dem.output_wkt));
+  g_report.clock.enter("write");
   try {
     io::write_ply(out.stream(), mesh,
                   o.ascii ? io::PlyFormat::ascii : io::PlyFormat::binary_little_endian);
@@ -190,6 +205,7 @@ int run_qslim(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printe
   }
   mesh.faces = result.faces;
   write_mesh(o, dem, std::move(mesh), out);
+  record_output(o, dem, dem.valid_cells, input, stats.kept_vertices, faces);
   summary(o, input, stats.kept_vertices, faces, start);
   return 0;
 }
@@ -260,6 +276,8 @@ int run_meta(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer
     std::fprintf(stderr, "dpts-par: stages: write %.2f s\n",
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t_write).count());
   }
+  record_output(o, dem, stats.valid_cells, stats.input_vertices, stats.kept_vertices, faces);
+  if (!g_report.path.empty()) g_report.pieces_json = cli::pieces_json(stats);
   summary(o, stats.input_vertices, stats.kept_vertices, faces, start);
   return 0;
 }
@@ -276,6 +294,8 @@ int run(const dpts::cli::ParOptions& o) {
     return 0;
   }
   const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
+  g_report.threads = threads;
+  g_report.clock.enter("open");
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
                                   static_cast<std::size_t>(threads));
   for (const auto& [key, value] : o.config) CPLSetConfigOption(key.c_str(), value.c_str());
@@ -284,7 +304,10 @@ int run(const dpts::cli::ParOptions& o) {
   }
   const auto start = std::chrono::steady_clock::now();
   cli::ProgressPrinter printer("dpts-par", o.quiet, &g_cancel_int);
-  const core::Progress progress = [&](double f, std::string_view s) { return printer(f, s); };
+  const core::Progress progress = [&](double f, std::string_view s) {
+    g_report.clock.enter(s);
+    return printer(f, s);
+  };
 
   if (o.meta) return run_meta(o, printer, progress, start);
   if (o.qslim) return run_qslim(o, printer, progress, start);
@@ -310,30 +333,52 @@ int run(const dpts::cli::ParOptions& o) {
   for (std::size_t i = 0; i < tin.cells.size(); ++i) z[i] = dem.grid.z[tin.cells[i]];
   const std::size_t faces = tin.faces.size();
   write_output(o, dem, std::move(tin), z, out);
+  record_output(o, dem, dem.valid_cells, stats.input_vertices, stats.kept_vertices, faces);
   summary(o, stats.input_vertices, stats.kept_vertices, faces, start);
   return 0;
+}
+
+// This executable's path, for batch children.
+std::string self_path(const char* argv0) {
+  std::error_code ec;
+  const auto p = std::filesystem::read_symlink("/proc/self/exe", ec);
+  return ec ? std::string(argv0) : p.string();
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  // note: sigaction without SA_RESTART, so a batch's waitpid() returns on a signal.
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
   GDALAllRegister();
   CPLPushErrorHandler(CPLQuietErrorHandler);
   // A bounded block cache: GDAL's default (5 % of RAM) would cache the whole raster.
   g_user_cache = CPLGetConfigOption("GDAL_CACHEMAX", nullptr) != nullptr;
   if (!g_user_cache) CPLSetConfigOption("GDAL_CACHEMAX", "64");
+  const std::vector<std::string> args(argv + 1, argv + argc);
+  dpts::cli::ParOptions o;
+  auto report = [&](const std::string& status, int code, const std::string& error) {
+    if (!o.help && !o.version) g_report.write(o, status, code, error);
+    return code;
+  };
   try {
-    return run(dpts::cli::parse_par(std::vector<std::string>(argv + 1, argv + argc)));
+    o = dpts::cli::parse_par(args);
+    g_report.path = o.report;
+    g_report.args = args;
+    if (!o.batch.empty()) return dpts::cli::run_batch(o, self_path(argv[0]), &g_cancel);
+    return report("ok", run(o), "");
   } catch (const dpts::UsageError& e) {
     std::cerr << "dpts-par: " << e.what() << "\nTry 'dpts-par --help' for more information.\n";
-    return 2;
+    return report("failed", 2, e.what());
   } catch (const dpts::Cancelled&) {
     std::cerr << "\ndpts-par: interrupted; no output written\n";
-    return 1;
+    return report("interrupted", 1, "interrupted by a signal; no output written");
   } catch (const std::exception& e) {
     std::cerr << "dpts-par: error: " << e.what() << "\n";
-    return 1;
+    return report("failed", 1, e.what());
   }
 }

@@ -93,8 +93,10 @@ RunResult run(const std::string& exe, const std::vector<std::string>& args,
   }
   int status = 0;
   const bool interrupt = !options.signal_when.empty() || options.signal_after_s > 0;
+  RunResult r;
   if (interrupt) {
     const auto start = std::chrono::steady_clock::now();
+    auto sent_at = start;
     bool sent = false;
     while (::waitpid(pid, &status, WNOHANG) == 0) {
       const double t =
@@ -104,13 +106,17 @@ RunResult run(const std::string& exe, const std::vector<std::string>& args,
                     (options.signal_after_s > 0 && t >= options.signal_after_s))) {
         ::kill(pid, options.signal);
         sent = true;
+        sent_at = std::chrono::steady_clock::now();
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    if (sent) {
+      r.seconds_after_signal =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - sent_at).count();
     }
   } else {
     ::waitpid(pid, &status, 0);
   }
-  RunResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   r.out = slurp(out_path);
   r.err = slurp(err_path);

@@ -30,6 +30,7 @@ class TempDir {
 struct RunResult {
   int exit_code = -1;
   std::string out, err;
+  double seconds_after_signal = -1;  // from the signal (RunOptions) to the exit; -1: none sent
 };
 
 // How to run a child: limits and an interruption.

@@ -3,7 +3,6 @@
 #include <ogr_spatialref.h>
 
 #include <catch2/catch.hpp>
-#include <chrono>
 #include <csignal>
 #include <cmath>
 #include <fstream>
@@ -225,13 +224,12 @@ TEST_CASE("SIGTERM and SIGINT stop a long run promptly, leaving no output and no
     ro.signal_when = "simplify";  // progress shows once the run has lasted a second
     ro.signal_after_s = 30;
     ro.signal = sig;
-    const auto start = std::chrono::steady_clock::now();
     const auto r = test::run(kExe, {"--algo", algo, "--threads", "2", dem, out}, ro);
-    const double secs =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     CHECK(r.exit_code == 1);
     CHECK(r.err.find("dpts-par: interrupted; no output written") != std::string::npos);
-    CHECK(secs < 25);
+    // Promptly: checked between removals and strips (0.2 s measured; sanitizers are slower).
+    CHECK(r.seconds_after_signal >= 0);
+    CHECK(r.seconds_after_signal < 10);
     CHECK(dir.files() == std::vector<std::string>{"big.tif", "out.ply"});
     std::ifstream in(out);
     std::string s;

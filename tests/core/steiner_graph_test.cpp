@@ -94,3 +94,24 @@ TEST_CASE("Steiner distances are never below the exact geodesic and within 1 % o
   CHECK(fig.min_rel > -1e-9);
   CHECK(fig.mean_rel < 0.01);
 }
+
+TEST_CASE("PointLocator copes with flat and thin meshes and far points", "[steiner][robust]") {
+  // All vertices on one line (zero-area bounding box): found by the fuzzer, it overflowed the
+  // bucket grid. Now the buckets stay few and queries answer.
+  core::TriMesh flat;
+  flat.xyz = {0, 0, 0, 1, 0, 0, 2, 0, 0, 3, 0, 0};
+  flat.faces = {{0, 1, 2}, {1, 2, 3}};
+  const core::PointLocator on_line(flat);
+  CHECK_NOTHROW(on_line.locate(1e300, -1e300, 1e300));
+  CHECK_FALSE(on_line.locate(0.5, 7.0, 0.25).has_value());
+  // A 1 x 1e9 sliver: a point inside is found, a point far away is not, even with a snap.
+  core::TriMesh thin;
+  thin.xyz = {0, 0, 1, 1e9, 0, 2, 0, 1, 3};
+  thin.faces = {{0, 1, 2}};
+  const core::PointLocator sliver(thin);
+  const auto inside = sliver.locate(10.0, 0.5);
+  REQUIRE(inside.has_value());
+  CHECK_FALSE(inside->snapped);
+  CHECK_FALSE(sliver.locate(10.0, 1e6, 1.0).has_value());
+  CHECK(sliver.locate(10.0, 1.5, 1.0).has_value());
+}
