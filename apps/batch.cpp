@@ -128,7 +128,7 @@ std::vector<std::string> batch_inputs(const std::string& source) {
   return inputs;
 }
 
-int run_batch(const ParOptions& o, const std::string& self, const volatile std::sig_atomic_t* cancel) {
+int run_batch(const ParOptions& o, const std::string& self, const std::atomic<int>* cancel) {
   const auto start = std::chrono::steady_clock::now();
   const std::vector<std::string> inputs = batch_inputs(o.batch);
   std::error_code ec;
@@ -177,7 +177,7 @@ int run_batch(const ParOptions& o, const std::string& self, const volatile std::
     std::fputc('\n', stderr);
   };
   for (;;) {
-    if (*cancel && !stopping) {
+    if (cancel->load(std::memory_order_relaxed) && !stopping) {
       stopping = true;
       for (const auto& [pid, index] : running) ::kill(pid, SIGTERM);
     }

@@ -1,7 +1,7 @@
 // dpts-par --batch: many DEMs in one resumable run, each simplified by a child dpts-par.
 #pragma once
 
-#include <csignal>
+#include <atomic>
 #include <string>
 #include <vector>
 
@@ -21,6 +21,6 @@ std::vector<std::string> batch_inputs(const std::string& source);
 // time. Writes OUT/batch-summary.json. A signal (cancel set) stops new inputs, passes SIGTERM
 // to the running ones, and writes the summary of what ended. Returns 0 when every input is
 // done, 1 otherwise.
-int run_batch(const ParOptions& o, const std::string& self, const volatile std::sig_atomic_t* cancel);
+int run_batch(const ParOptions& o, const std::string& self, const std::atomic<int>* cancel);
 
 }  // namespace dpts::cli

@@ -209,7 +209,7 @@ ParOptions parse_par(const std::vector<std::string>& args) {
   return o;
 }
 
-ProgressPrinter::ProgressPrinter(std::string prog, bool quiet, const volatile int* cancel_flag)
+ProgressPrinter::ProgressPrinter(std::string prog, bool quiet, const std::atomic<int>* cancel_flag)
     : prog_(std::move(prog)),
       quiet_(quiet),
       tty_(::isatty(2) != 0),
@@ -217,7 +217,7 @@ ProgressPrinter::ProgressPrinter(std::string prog, bool quiet, const volatile in
       start_(std::chrono::steady_clock::now()) {}
 
 bool ProgressPrinter::operator()(double fraction, std::string_view stage) {
-  if (cancel_ && *cancel_) return false;
+  if (cancel_ && cancel_->load(std::memory_order_relaxed)) return false;
   if (quiet_) return true;
   if (stage != stage_) {
     stage_ = std::string(stage);

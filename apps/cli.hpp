@@ -1,6 +1,7 @@
 // Command-line parsing and progress reporting shared by the dpts executables.
 #pragma once
 
+#include <atomic>
 #include <charconv>
 #include <chrono>
 #include <cstdint>
@@ -65,7 +66,7 @@ std::string par_help();
 // on a terminal, one line per 10 % otherwise. Returns false once a cancel was requested.
 class ProgressPrinter {
  public:
-  ProgressPrinter(std::string prog, bool quiet, const volatile int* cancel_flag);
+  ProgressPrinter(std::string prog, bool quiet, const std::atomic<int>* cancel_flag);
   bool operator()(double fraction, std::string_view stage);
   void finish();  // ends a pending terminal line
 
@@ -73,7 +74,7 @@ class ProgressPrinter {
   std::string prog_;
   bool quiet_;
   bool tty_;
-  const volatile int* cancel_;
+  const std::atomic<int>* cancel_;
   std::chrono::steady_clock::time_point start_;
   std::string stage_;
   int last_decile_ = -1;
