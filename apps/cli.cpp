@@ -63,8 +63,9 @@ Batch mode: dpts-par --batch LIST|DIR --out-dir OUT [--jobs N] [options]
 
 Every valid cell centre is a vertex; no-data, NaN, infinite and absurd (beyond +-1e7)
 heights are not, and no face covers a void or leaves the valid data. Heights are the
-band's values with its scale and offset applied; any real cell type is read. Output: vertex x y z (double, output CRS), faces
-counter-clockwise seen from above, the CRS as WKT in a header comment. The output file
+band's values with its scale and offset applied; any real cell type is read. Output:
+vertex x y z (double, output CRS), faces counter-clockwise seen from above, the CRS as
+WKT in a header comment. The output file
 appears only when complete. Exit status: 0 ok, 1 failure, 2 bad usage.
 )";
 }
