@@ -42,16 +42,9 @@ echo "second run (resume): $wall s, exit $rc"
 summary "$work/whole"
 
 # Killed mid-way, then run again.
-"$exe" --batch "$work/in" --out-dir "$work/killed" "${options[@]}" 2>"$work/killed.log" &
-pid=$!
-sleep "$kill_after"
-kill -TERM $pid
-t0=$(date +%s.%N)
-rc=0
-wait $pid || rc=$?
-echo "killed after ${kill_after} s: exit $rc, stopped $(echo "$(date +%s.%N) - $t0" | bc) s after SIGTERM"
+"$root/bench/interrupt.sh" "$kill_after" "$work/killed" \
+  --batch "$work/in" --out-dir "$work/killed" "${options[@]}"
 summary "$work/killed"
-echo "  temporary files left: $(find "$work/killed" -name '*.partial*' | wc -l)"
 read -r wall rc <<<"$(run killed)"
 echo "re-run: $wall s, exit $rc"
 summary "$work/killed"
