@@ -12,7 +12,6 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
-#include <sstream>
 
 #include "apps/cli.hpp"
 #include "core/errors.hpp"
@@ -219,25 +218,37 @@ int run(const Options& o) {
     std::printf("time             %.2f s\n", secs);
   }
   if (o.json) {
-    std::ostringstream js;
-    js << "{\"distance_error\":" << io::json_number(r.distance_error) << ",\"distance_error_sets\":[";
-    for (std::size_t i = 0; i < r.set_errors.size(); ++i)
-      js << (i ? "," : "") << io::json_number(r.set_errors[i]);
-    js << "],\"vertical_rmse\":" << io::json_number(rmse) << ",\"vertical_max\":" << io::json_number(vmax)
-       << ",\"mesh_vertices\":" << s.vertex_count() << ",\"mesh_faces\":" << s.faces.size()
-       << ",\"dem_vertices\":" << t.vertex_count() << ",\"dem_faces\":" << t.faces.size()
-       << ",\"points\":" << eo.points << ",\"sets\":" << eo.sets << ",\"seed\":" << eo.seed
-       << ",\"delta_m\":" << io::json_number(r.delta_m) << ",\"steiner_nodes_dem\":" << r.original_nodes
-       << ",\"steiner_nodes_mesh\":" << r.simplified_nodes << ",\"snapped_points\":" << r.snapped
-       << ",\"faces_not_ccw\":" << mc.clockwise_or_flat << ",\"bad_edges\":" << mc.bad_edges
-       << ",\"faces_over_nodata\":" << over_nodata
-       << ",\"coverage\":" << io::json_number(mc.area / footprint_area)
-       << ",\"cells_outside_mesh\":" << uncovered << ",\"threads\":" << threads
-       << ",\"dem\":" << io::json_string(o.dem) << ",\"mesh\":" << io::json_string(o.mesh)
-       << ",\"seconds_geodesics_dem\":" << io::json_number(r.original_s)
-       << ",\"seconds_geodesics_mesh\":" << io::json_number(r.simplified_s)
-       << ",\"seconds\":" << io::json_number(secs) << "}";
-    std::cout << js.str() << "\n";
+    io::JsonArray sets;
+    for (double e : r.set_errors) sets.raw(io::json_number(e));
+    std::cout << io::JsonObject()
+                     .add("distance_error", r.distance_error)
+                     .raw("distance_error_sets", sets.str())
+                     .add("vertical_rmse", rmse)
+                     .add("vertical_max", vmax)
+                     .add("mesh_vertices", s.vertex_count())
+                     .add("mesh_faces", s.faces.size())
+                     .add("dem_vertices", t.vertex_count())
+                     .add("dem_faces", t.faces.size())
+                     .add("points", eo.points)
+                     .add("sets", eo.sets)
+                     .add("seed", static_cast<unsigned long long>(eo.seed))
+                     .add("delta_m", r.delta_m)
+                     .add("steiner_nodes_dem", r.original_nodes)
+                     .add("steiner_nodes_mesh", r.simplified_nodes)
+                     .add("snapped_points", r.snapped)
+                     .add("faces_not_ccw", mc.clockwise_or_flat)
+                     .add("bad_edges", mc.bad_edges)
+                     .add("faces_over_nodata", over_nodata)
+                     .add("coverage", mc.area / footprint_area)
+                     .add("cells_outside_mesh", uncovered)
+                     .add("threads", threads)
+                     .add("dem", o.dem)
+                     .add("mesh", o.mesh)
+                     .add("seconds_geodesics_dem", r.original_s)
+                     .add("seconds_geodesics_mesh", r.simplified_s)
+                     .add("seconds", secs)
+                     .str()
+              << "\n";
   }
   return 0;
 }
