@@ -21,7 +21,6 @@
 #include "core/errors.hpp"
 #include "io/atomic_output_file.hpp"
 #include "io/json.hpp"
-#include "parallel/meta.hpp"
 
 namespace dpts::cli {
 namespace fs = std::filesystem;
@@ -157,8 +156,7 @@ int run_batch(const ParOptions& o, const std::string& self, const std::atomic<in
   const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
   const int parallel = std::max(1, std::min(o.jobs, threads));
   const int per_job = std::max(1, threads / parallel);
-  const std::size_t memory_mb =
-      (o.max_memory_mb > 0 ? o.max_memory_mb : par::available_memory_bytes() >> 20) / parallel;
+  const std::size_t memory_mb = (memory_limit_bytes(o) >> 20) / parallel;
   if (!o.quiet) {
     std::fprintf(stderr, "dpts-par: batch of %zu inputs into %s, %d at a time x %d threads\n",
                  jobs.size(), o.out_dir.c_str(), parallel, per_job);

@@ -10,6 +10,7 @@
 #include <iostream>
 
 #include "core/errors.hpp"
+#include "parallel/meta.hpp"
 
 namespace dpts::cli {
 namespace {}  // namespace
@@ -208,6 +209,10 @@ ParOptions parse_par(const std::vector<std::string>& args) {
   o.input = positional[0];
   o.output = positional[1];
   return o;
+}
+
+std::size_t memory_limit_bytes(const ParOptions& o) {
+  return o.max_memory_mb > 0 ? o.max_memory_mb << 20 : par::available_memory_bytes();
 }
 
 ProgressPrinter::ProgressPrinter(std::string prog, bool quiet, const std::atomic<int>* cancel_flag)

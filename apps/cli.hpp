@@ -58,6 +58,9 @@ T parse_number(const std::string& flag, const std::string& text, T min, const ch
   return value;
 }
 
+// The memory a run may use, in bytes: --max-memory, or what the system has available now.
+std::size_t memory_limit_bytes(const ParOptions& o);
+
 // Parses dpts-par's arguments. Throws UsageError with a one-line message naming the flag.
 ParOptions parse_par(const std::vector<std::string>& args);
 std::string par_help();

@@ -49,11 +49,6 @@ dpts::io::DemReadOptions read_options(const dpts::cli::ParOptions& o) {
   return r;
 }
 
-// The memory a run may use: --max-memory, or what the system has available now.
-std::size_t memory_limit(const dpts::cli::ParOptions& o) {
-  return o.max_memory_mb > 0 ? o.max_memory_mb << 20 : dpts::par::available_memory_bytes();
-}
-
 // Opens the DEM and reads it whole, refusing first (with the estimate) a DEM whose whole-DEM
 // run would not fit in memory.
 dpts::io::Dem read_whole_dem(const dpts::cli::ParOptions& o, std::size_t bytes_per_cell,
@@ -61,7 +56,7 @@ dpts::io::Dem read_whole_dem(const dpts::cli::ParOptions& o, std::size_t bytes_p
   using namespace dpts;
   io::DemInfo info = io::open_dem(o.input, read_options(o));
   const double need = static_cast<double>(info.cell_count()) * bytes_per_cell;
-  const std::size_t limit = memory_limit(o);
+  const std::size_t limit = cli::memory_limit_bytes(o);
   if (need > static_cast<double>(limit)) {
     throw InputError(o.input + ": " + std::to_string(info.width) + " x " +
                      std::to_string(info.height) + " cells need about " + par::format_bytes(need) +
@@ -107,7 +102,6 @@ void summary(const dpts::cli::ParOptions& o, std::size_t in, std::size_t kept, s
                kept, faces, o.algo_text.c_str(), secs, o.output.c_str());
 }
 
-// Writes the TIN (cells of the DEM's raster, their heights) as PLY in the output CRS.
 // Writes a mesh (x, y in the output CRS) as PLY, refusing one with folded faces.
 void write_mesh(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem, dpts::io::Mesh mesh,
                 dpts::io::AtomicOutputFile& out) {
@@ -235,7 +229,7 @@ int run_meta(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer
   mo.tile_bytes = tile_bytes;
   mo.value_points = o.value_points;
   mo.seed = o.elimination.seed;
-  mo.memory_limit_bytes = memory_limit(o);
+  mo.memory_limit_bytes = cli::memory_limit_bytes(o);
   par::MetaStats stats;
   par::MetaResult result = par::simplify_meta(dem, mo, progress, &stats);
   printer.finish();
