@@ -28,10 +28,10 @@ std::string field(const std::string& json, const std::string& key) {
   return io::json_field(json, key).value_or("<missing " + key + ">");
 }
 
-// A folder of small DEMs, one of them not a raster.
-void make_folder(const fs::path& dir, int size) {
+// A folder of `count` small DEMs (dem0.tif, ...) and one file that is not a raster.
+void make_folder(const fs::path& dir, int size, int count = 3) {
   fs::create_directories(dir);
-  for (int k = 0; k < 3; ++k) {
+  for (int k = 0; k < count; ++k) {
     test::write_geotiff(dir / ("dem" + std::to_string(k) + ".tif"),
                         test::make_grid(size, size, [k](int c, int r) {
                           return 100.0 * k + 30.0 * std::sin(0.2 * c + k) * std::cos(0.15 * r);
@@ -168,9 +168,16 @@ TEST_CASE("batch usage errors exit 2", "[cli][batch]") {
 TEST_CASE("a batch killed by SIGTERM and run again gives the same outputs as one run",
           "[cli][batch]") {
   test::TempDir dir;
-  make_folder(dir / "in", 300);
+  // Six inputs: after the first ends, five are left (a second or more), so the signal lands
+  // mid-batch; with three small ones a loaded CI machine once finished the batch first.
+  constexpr int kInputs = 6;
+  make_folder(dir / "in", 300, kInputs);
   std::filesystem::remove(dir / "in" / "broken.tif");
-  std::ofstream(dir / "list.txt") << "# three DEMs\nin/dem0.tif\nin/dem1.tif\nin/dem2.tif\n";
+  {
+    std::ofstream list(dir / "list.txt");
+    list << "# the DEMs\n";
+    for (int k = 0; k < kInputs; ++k) list << "in/dem" << k << ".tif\n";
+  }
   auto batch = [&](const std::string& out, const test::RunOptions& ro = {}) {
     return test::run(kExe, {"--batch", (dir / "list.txt").string(), "--out-dir",
                             (dir / out).string(), "--algo", "vp-meta", "--jobs", "2", "--threads",
@@ -179,7 +186,7 @@ TEST_CASE("a batch killed by SIGTERM and run again gives the same outputs as one
   };
   REQUIRE(batch("whole").exit_code == 0);
   test::RunOptions ro;
-  ro.signal_when = "[1/3]";  // once the first input has finished
+  ro.signal_when = "[1/6]";  // once the first input has finished
   ro.signal_after_s = 60;
   const auto killed = batch("resumed", ro);
   CHECK(killed.exit_code == 1);
@@ -192,7 +199,7 @@ TEST_CASE("a batch killed by SIGTERM and run again gives the same outputs as one
   const auto resumed = batch("resumed");
   CHECK(resumed.exit_code == 0);
   CHECK(std::stoi(field(slurp(dir / "resumed" / "batch-summary.json"), "skipped")) >= 1);
-  for (int k = 0; k < 3; ++k) {
+  for (int k = 0; k < kInputs; ++k) {
     const std::string name = "dem" + std::to_string(k) + ".ply";
     CHECK(io::sha256_file((dir / "whole" / name).string()) ==
           io::sha256_file((dir / "resumed" / name).string()));
