@@ -54,8 +54,10 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
   // Count the nodes before allocating any: a mesh far larger than delta (or with a non-finite
   // coordinate) is refused here, not by running out of memory.
   double nodes = static_cast<double>(nv);
+  std::size_t edge_count = 0;
   for (std::size_t i = 0; i < e.size(); ++i) {
     if (i > 0 && std::get<0>(e[i]) == std::get<0>(e[i - 1])) continue;
+    ++edge_count;
     const std::uint64_t key = std::get<0>(e[i]);
     nodes += std::floor(dist3(&mesh.xyz[3 * (key >> 32)], &mesh.xyz[3 * (key & 0xFFFFFFFFu)]) /
                         delta);
@@ -64,12 +66,16 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
     throw std::invalid_argument("too many Steiner points (" + std::to_string(nodes) +
                                 "; at most " + std::to_string(kMaxNodes) + ")");
   }
-  pos_.reserve(3 * static_cast<std::size_t>(nodes));
-  pos_.assign(mesh.xyz.begin(), mesh.xyz.end());
+  nodes_.reserve(static_cast<std::size_t>(nodes));
+  for (std::size_t v = 0; v < nv; ++v) {
+    nodes_.push_back({{mesh.xyz[3 * v], mesh.xyz[3 * v + 1], mesh.xyz[3 * v + 2]}, kNoEdge});
+  }
+  edges_.reserve(edge_count);
+  edge_first_.reserve(edge_count + 1);
   edge_first_.push_back(static_cast<std::uint32_t>(nv));
   for (std::size_t i = 0; i < e.size();) {
     const std::uint64_t key = std::get<0>(e[i]);
-    const std::uint32_t edge = static_cast<std::uint32_t>(edge_faces_.size());
+    const std::uint32_t edge = static_cast<std::uint32_t>(edges_.size());
     std::array<std::uint32_t, 2> faces{kNoFace, kNoFace};
     int n = 0;
     for (; i < e.size() && std::get<0>(e[i]) == key; ++i, ++n) {
@@ -77,30 +83,66 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
       faces[n] = std::get<1>(e[i]);
       face_edges_[std::get<1>(e[i])][std::get<2>(e[i])] = edge;
     }
-    edge_faces_.push_back(faces);
-    edge_ends_.push_back(
-        {static_cast<std::uint32_t>(key >> 32), static_cast<std::uint32_t>(key & 0xFFFFFFFFu)});
+    Edge rec;
+    rec.ends = {static_cast<std::uint32_t>(key >> 32), static_cast<std::uint32_t>(key & 0xFFFFFFFFu)};
+    for (int side = 0; side < 2; ++side) rec.sides[side].face = faces[side];
+    edges_.push_back(rec);
     // floor(len / delta) points evenly inside the edge.
     const double* a = &mesh.xyz[3 * (key >> 32)];
     const double* b = &mesh.xyz[3 * (key & 0xFFFFFFFFu)];
     const auto k = static_cast<std::uint32_t>(std::floor(dist3(a, b) / delta));
     for (std::uint32_t j = 1; j <= k; ++j) {
       const double t = static_cast<double>(j) / (k + 1);
-      for (int c = 0; c < 3; ++c) pos_.push_back(a[c] + t * (b[c] - a[c]));
-      node_edge_.push_back(edge);
+      nodes_.push_back({{a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]),
+                         a[2] + t * (b[2] - a[2])},
+                        edge});
     }
-    edge_first_.push_back(static_cast<std::uint32_t>(pos_.size() / 3));
+    edge_first_.push_back(static_cast<std::uint32_t>(nodes_.size()));
   }
-  // Vertex -> faces, CSR.
-  vertex_face_first_.assign(nv + 1, 0);
+  // Each edge's record: its nodes, and per face the opposite corner and the other two edges.
+  for (std::uint32_t i = 0; i < edges_.size(); ++i) {
+    Edge& rec = edges_[i];
+    rec.first = edge_first_[i];
+    rec.end = edge_first_[i + 1];
+    for (auto& side : rec.sides) {
+      if (side.face == kNoFace) continue;
+      const auto& fe = face_edges_[side.face];
+      const int li = fe[0] == i ? 0 : fe[1] == i ? 1 : 2;
+      side.opposite = mesh.faces[side.face][(li + 2) % 3];
+      for (int k = 0; k < 2; ++k) {
+        const std::uint32_t other = fe[(li + 1 + k) % 3];
+        side.first[k] = edge_first_[other];
+        side.end[k] = edge_first_[other + 1];
+      }
+    }
+  }
+  // Vertex -> its corners, CSR.
+  corner_first_.assign(nv + 1, 0);
   for (const auto& f : mesh.faces) {
-    for (auto v : f) ++vertex_face_first_[v + 1];
+    for (auto v : f) ++corner_first_[v + 1];
   }
-  for (std::size_t v = 0; v < nv; ++v) vertex_face_first_[v + 1] += vertex_face_first_[v];
-  vertex_faces_.resize(vertex_face_first_[nv]);
-  std::vector<std::uint32_t> fill(vertex_face_first_.begin(), vertex_face_first_.end() - 1);
+  for (std::size_t v = 0; v < nv; ++v) corner_first_[v + 1] += corner_first_[v];
+  corners_.resize(corner_first_[nv]);
+  std::vector<std::uint32_t> fill(corner_first_.begin(), corner_first_.end() - 1);
   for (std::uint32_t f = 0; f < mesh.faces.size(); ++f) {
-    for (auto v : mesh.faces[f]) vertex_faces_[fill[v]++] = f;
+    for (int i = 0; i < 3; ++i) {
+      const std::uint32_t v = mesh.faces[f][i];
+      Corner& c = corners_[fill[v]++];
+      c.face = f;
+      // Along the two edges at this corner: the first node on each (the far corner if none).
+      for (int k = 0; k < 2; ++k) {
+        const Edge& rec = edges_[face_edges_[f][k == 0 ? i : (i + 2) % 3]];
+        const bool from_low = rec.ends[0] == v;
+        if (rec.first == rec.end) {
+          c.along[k] = from_low ? rec.ends[1] : rec.ends[0];
+        } else {
+          c.along[k] = from_low ? rec.first : rec.end - 1;
+        }
+      }
+      const std::uint32_t across = face_edges_[f][(i + 1) % 3];
+      c.across_first = edge_first_[across];
+      c.across_end = edge_first_[across + 1];
+    }
   }
 }
 
@@ -113,36 +155,37 @@ void SteinerGraph::face_nodes(std::uint32_t f, std::vector<std::uint32_t>& out) 
   }
 }
 
-void NodeHeap::reset(std::size_t nodes) {
+void LabelHeap::reset(std::size_t nodes) {
   heap_.clear();
-  pos_.assign(nodes, 0);
+  label_.assign(nodes, {std::numeric_limits<double>::infinity(), 0});
 }
 
-void NodeHeap::sift_up(std::size_t i, Entry e) {
+void LabelHeap::sift_up(std::size_t i, Entry e) {
   while (i > 0) {
     const std::size_t parent = (i - 1) / 4;
     if (!(e.key < heap_[parent].key)) break;
     heap_[i] = heap_[parent];
-    pos_[heap_[i].node] = static_cast<std::uint32_t>(i + 1);
+    label_[heap_[i].node].slot = static_cast<std::uint32_t>(i + 1);
     i = parent;
   }
   heap_[i] = e;
-  pos_[e.node] = static_cast<std::uint32_t>(i + 1);
+  label_[e.node].slot = static_cast<std::uint32_t>(i + 1);
 }
 
-void NodeHeap::push_or_decrease(std::uint32_t node, double key) {
-  const std::uint32_t p = pos_[node];
-  if (p == 0) {
-    heap_.push_back({key, node});
-    sift_up(heap_.size() - 1, {key, node});
+void LabelHeap::decrease(std::uint32_t node, double key, std::uint32_t tag) {
+  Label& l = label_[node];
+  l.dist = key;
+  if (l.slot == 0) {
+    heap_.push_back({key, node, tag});
+    sift_up(heap_.size() - 1, {key, node, tag});
   } else {
-    sift_up(p - 1, {key, node});
+    sift_up(l.slot - 1, {key, node, tag});
   }
 }
 
-std::pair<double, std::uint32_t> NodeHeap::pop() {
+LabelHeap::Entry LabelHeap::pop() {
   const Entry top = heap_.front();
-  pos_[top.node] = 0;
+  label_[top.node].slot = 0;
   const Entry last = heap_.back();
   heap_.pop_back();
   if (!heap_.empty()) {
@@ -159,13 +202,13 @@ std::pair<double, std::uint32_t> NodeHeap::pop() {
       }
       if (!(heap_[best].key < last.key)) break;
       heap_[i] = heap_[best];
-      pos_[heap_[i].node] = static_cast<std::uint32_t>(i + 1);
+      label_[heap_[i].node].slot = static_cast<std::uint32_t>(i + 1);
       i = best;
     }
     heap_[i] = last;
-    pos_[last.node] = static_cast<std::uint32_t>(i + 1);
+    label_[last.node].slot = static_cast<std::uint32_t>(i + 1);
   }
-  return {top.key, top.node};
+  return top;
 }
 
 GeodesicQuery::GeodesicQuery(const SteinerGraph& graph)
@@ -178,47 +221,49 @@ void GeodesicQuery::distances(const SurfacePoint& source, const std::vector<Surf
   out.assign(targets.size(), inf);
   if (targets.empty()) return;
   // Targets are extra nodes n + j, reached from their face's boundary nodes.
-  dist_.assign(n + targets.size(), inf);
   target_next_.assign(targets.size(), -1);
   for (std::size_t j = 0; j < targets.size(); ++j) {
     target_next_[j] = face_target_head_[targets[j].face];
     face_target_head_[targets[j].face] = static_cast<std::int32_t>(j);
   }
-  heap_.reset(n + targets.size());
+  labels_.reset(n + targets.size());
   const double src[3] = {source.x, source.y, source.z};
   // Relaxes from a point p at distance d into face f: its boundary nodes and its targets.
   // note: a node improves only if |p v| < dist(v) - d; comparing squares first skips the
   // square root for the many relaxations that cannot improve (settled or nearer nodes).
-  auto relax = [&](std::uint32_t v, const double* p, const double* q, double d) {
-    const double gap = dist_[v] - d;
+  auto relax = [&](std::uint32_t v, const double* p, const double* q, double d,
+                   std::uint32_t via) {
+    const double old = labels_.dist(v);
+    const double gap = old - d;
     if (!(gap > 0)) return;
     const double dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
     const double w2 = dx * dx + dy * dy + dz * dz;
     if (w2 >= gap * gap) return;
     const double nd = d + std::sqrt(w2);
-    if (nd < dist_[v]) {
-      dist_[v] = nd;
-      heap_.push_or_decrease(v, nd);
+    if (nd < old) {
+      if (old == inf && v < n) g_.prefetch(v);
+      labels_.decrease(v, nd, via);
     }
   };
   auto relax_targets = [&](std::uint32_t f, const double* p, double d) {
     for (std::int32_t j = face_target_head_[f]; j >= 0; j = target_next_[j]) {
       const double q[3] = {targets[j].x, targets[j].y, targets[j].z};
-      relax(static_cast<std::uint32_t>(n + j), p, q, d);
+      relax(static_cast<std::uint32_t>(n + j), p, q, d, SteinerGraph::kAnywhere);
     }
   };
   auto relax_face = [&](std::uint32_t f, const double* p, double d) {
     g_.face_nodes(f, nodes_);
-    for (std::uint32_t v : nodes_) relax(v, p, g_.position(v), d);
+    for (std::uint32_t v : nodes_) relax(v, p, g_.position(v), d, f);
     relax_targets(f, p, d);
   };
   relax_face(source.face, src, 0.0);
   std::size_t remaining = targets.size();
-  while (!heap_.empty() && remaining > 0) {
-    // note: no structured binding: C++17 lambdas (clang) cannot capture one.
-    const std::pair<double, std::uint32_t> top = heap_.pop();
-    const double d = top.first;
-    const std::uint32_t u = top.second;
+  while (!labels_.empty() && remaining > 0) {
+    const LabelHeap::Entry top = labels_.pop();
+    const double d = top.key;
+    const std::uint32_t u = top.node;
+    // The next node to settle, most likely: its records load while this one relaxes.
+    if (!labels_.empty() && labels_.top_node() < n) g_.prefetch(labels_.top_node());
     if (u >= n) {
       out[u - n] = d;
       --remaining;
@@ -226,7 +271,8 @@ void GeodesicQuery::distances(const SurfacePoint& source, const std::vector<Surf
     }
     const double* p = g_.position(u);
     g_.for_each_neighbour(
-        u, [&](std::uint32_t v) { relax(v, p, g_.position(v), d); },
+        u, top.tag,
+        [&](std::uint32_t v, std::uint32_t via) { relax(v, p, g_.position(v), d, via); },
         [&](std::uint32_t f) { relax_targets(f, p, d); });
   }
   for (const auto& t : targets) face_target_head_[t.face] = -1;

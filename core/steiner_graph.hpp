@@ -40,52 +40,73 @@ class SteinerGraph {
 
   const TriMesh& mesh() const { return mesh_; }
   double delta() const { return delta_; }
-  std::size_t node_count() const { return pos_.size() / 3; }
+  std::size_t node_count() const { return nodes_.size(); }
   std::size_t steiner_count() const { return node_count() - mesh_.vertex_count(); }
-  const double* position(std::uint32_t node) const { return &pos_[3 * node]; }
+  const double* position(std::uint32_t node) const { return nodes_[node].p.data(); }
+
+  // Hints the cache about what for_each_neighbour(node) will read: Dijkstra calls it when it
+  // first reaches a node, long before the node is settled.
+  void prefetch(std::uint32_t node) const {
+    __builtin_prefetch(&nodes_[node]);
+    const std::uint32_t e = nodes_[node].edge;
+    if (e != kNoEdge) {
+      __builtin_prefetch(&edges_[e]);
+    } else {
+      __builtin_prefetch(&corners_[corner_first_[node]]);
+    }
+  }
 
   // The nodes on face f's boundary (its corners and its edges' Steiner points), into out.
   void face_nodes(std::uint32_t f, std::vector<std::uint32_t>& out) const;
 
-  // Calls node_fn(v) for every node v joined to `node` by a graph edge, except that along the
-  // node's own edges only the nearest node on each side is given: the others lie on the same
-  // straight line, so the path through the nearest one has the same length (and Dijkstra finds
-  // it). Calls face_fn(f) for every face the node lies on.
+  // Where a node's distance label came from (Dijkstra records it with the label): a face id,
+  // the node's own edge, or anywhere.
+  static constexpr std::uint32_t kAlongEdge = 0xFFFFFFFEu;
+  static constexpr std::uint32_t kAnywhere = 0xFFFFFFFFu;
+
+  // The relaxations Dijkstra needs from a settled node, given where its label came from.
+  // Calls node_fn(v, via) for nodes v joined to `node` by a graph edge, via the face the edge
+  // lies in (kAlongEdge along the node's own edge), and face_fn(f) for the faces whose targets
+  // the node must relax. Two exact prunings, both from the triangle inequality in one face
+  // (every pair of a face's boundary points is joined, so for p, u, v on one face
+  // |p v| <= |p u| + |u v|):
+  // - Along the node's own edges only the nearest node on each side is given: the others lie on
+  //   the same straight line, so the path through the nearest one has the same length.
+  // - A node whose label came from p through face F skips F: p relaxed all of F (or its own
+  //   predecessor did, by induction), never worse than through this node. A Steiner point so
+  //   relaxes only the face across its edge; one reached along its edge from a neighbour q only
+  //   continues along the edge (q covers both faces).
+  // Distances are those of the full graph (up to rounding).
   template <typename NodeFn, typename FaceFn>
-  void for_each_neighbour(std::uint32_t node, NodeFn&& node_fn, FaceFn&& face_fn) const {
+  void for_each_neighbour(std::uint32_t node, std::uint32_t entry, NodeFn&& node_fn,
+                          FaceFn&& face_fn) const {
     const std::uint32_t nv = static_cast<std::uint32_t>(mesh_.vertex_count());
-    auto edge_interior = [&](std::uint32_t e) {
-      for (std::uint32_t n = edge_first_[e]; n < edge_first_[e + 1]; ++n) node_fn(n);
+    auto range = [&](std::uint32_t first, std::uint32_t end, std::uint32_t via) {
+      for (std::uint32_t n = first; n < end; ++n) node_fn(n, via);
     };
     if (node < nv) {
-      for (std::uint32_t k = vertex_face_first_[node]; k < vertex_face_first_[node + 1]; ++k) {
-        const std::uint32_t f = vertex_faces_[k];
-        const auto& fv = mesh_.faces[f];
-        const int i = fv[0] == node ? 0 : fv[1] == node ? 1 : 2;
-        // Along the two edges at this corner: the first node on each.
-        for (int li : {i, (i + 2) % 3}) {
-          const std::uint32_t e = face_edges_[f][li];
-          if (edge_first_[e] == edge_first_[e + 1]) {
-            node_fn(edge_ends_[e][0] == node ? edge_ends_[e][1] : edge_ends_[e][0]);
-          } else {
-            node_fn(edge_ends_[e][0] == node ? edge_first_[e] : edge_first_[e + 1] - 1);
-          }
-        }
-        edge_interior(face_edges_[f][(i + 1) % 3]);  // across the face
-        face_fn(f);
+      for (std::uint32_t k = corner_first_[node]; k < corner_first_[node + 1]; ++k) {
+        const Corner& c = corners_[k];
+        if (c.face == entry) continue;
+        node_fn(c.along[0], kAlongEdge);
+        node_fn(c.along[1], kAlongEdge);
+        range(c.across_first, c.across_end, c.face);
+        face_fn(c.face);
       }
       return;
     }
-    const std::uint32_t e = node_edge_[node - nv];
-    node_fn(node == edge_first_[e] ? edge_ends_[e][0] : node - 1);
-    node_fn(node + 1 == edge_first_[e + 1] ? edge_ends_[e][1] : node + 1);
-    for (std::uint32_t f : edge_faces_[e]) {
-      if (f == kNoFace) continue;
-      const int li = face_edges_[f][0] == e ? 0 : face_edges_[f][1] == e ? 1 : 2;
-      node_fn(mesh_.faces[f][(li + 2) % 3]);  // the opposite corner
-      edge_interior(face_edges_[f][(li + 1) % 3]);
-      edge_interior(face_edges_[f][(li + 2) % 3]);
-      face_fn(f);
+    const Edge& e = edges_[nodes_[node].edge];
+    if (entry == kAlongEdge || entry == kAnywhere) {
+      node_fn(node == e.first ? e.ends[0] : node - 1, kAlongEdge);
+      node_fn(node + 1 == e.end ? e.ends[1] : node + 1, kAlongEdge);
+      if (entry == kAlongEdge) return;
+    }
+    for (const Edge::Side& side : e.sides) {
+      if (side.face == kNoFace || side.face == entry) continue;
+      node_fn(side.opposite, side.face);
+      range(side.first[0], side.end[0], side.face);
+      range(side.first[1], side.end[1], side.face);
+      face_fn(side.face);
     }
   }
   static constexpr std::uint32_t kNoFace = 0xFFFFFFFFu;
@@ -93,34 +114,64 @@ class SteinerGraph {
  private:
   const TriMesh& mesh_;
   double delta_;
-  std::vector<double> pos_;                               // node positions, vertices first
+  static constexpr std::uint32_t kNoEdge = 0xFFFFFFFFu;
+  struct Node {  // vertices first, then each edge's Steiner points
+    std::array<double, 3> p;
+    std::uint32_t edge;  // the edge a Steiner point lies on; kNoEdge for a vertex
+  };
+  std::vector<Node> nodes_;
   std::vector<std::array<std::uint32_t, 3>> face_edges_;  // edge of (v0,v1), (v1,v2), (v2,v0)
-  std::vector<std::array<std::uint32_t, 2>> edge_faces_;
   std::vector<std::uint32_t> edge_first_;  // first Steiner node of each edge, + end
-  std::vector<std::array<std::uint32_t, 2>>
-      edge_ends_;                         // (lower, higher) vertex; nodes run low -> high
-  std::vector<std::uint32_t> node_edge_;  // Steiner node - vertex_count -> edge
-  std::vector<std::uint32_t> vertex_face_first_, vertex_faces_;  // CSR vertex -> faces
+  // note: Dijkstra's time goes into cache misses, one per dependent load; so what a settled node
+  // needs is gathered in one record: an edge's (one cache line) for a Steiner point, its
+  // corners' (contiguous) for a vertex.
+  struct alignas(64) Edge {
+    std::uint32_t first = 0, end = 0;  // its Steiner nodes, running from ends[0] to ends[1]
+    std::array<std::uint32_t, 2> ends{};
+    struct Side {  // one face of the edge
+      std::uint32_t face = kNoFace;
+      std::uint32_t opposite = 0;                // the face's corner off the edge
+      std::array<std::uint32_t, 2> first{}, end{};  // Steiner nodes of its two other edges
+    };
+    std::array<Side, 2> sides;
+  };
+  struct Corner {               // a vertex in one of its faces
+    std::uint32_t face = 0;
+    std::array<std::uint32_t, 2> along{};  // nearest node on each of its two edges there
+    std::uint32_t across_first = 0, across_end = 0;  // Steiner nodes of the opposite edge
+  };
+  std::vector<Edge> edges_;
+  std::vector<std::uint32_t> corner_first_;  // CSR vertex -> corners_
+  std::vector<Corner> corners_;
 };
 
-// An indexed 4-ary min-heap of node ids keyed by distance, with decrease-key: each node is in
-// the heap at most once (fewer entries than a lazy heap with duplicates).
-class NodeHeap {
+// Dijkstra's tentative distances with an indexed 4-ary min-heap over them (decrease-key: each
+// node is in the heap at most once). A node's distance and heap slot share one 16-byte label,
+// so a relaxation touches one cache line of it.
+class LabelHeap {
  public:
-  void reset(std::size_t nodes);
-  bool empty() const { return heap_.empty(); }
-  // Inserts node or lowers its key (key must not be larger than the current one).
-  void push_or_decrease(std::uint32_t node, double key);
-  std::pair<double, std::uint32_t> pop();
-
- private:
   struct Entry {
     double key;
     std::uint32_t node;
+    std::uint32_t tag;  // caller's data, kept with the key (fills the entry's padding)
+  };
+  // All nodes at infinity, the heap empty.
+  void reset(std::size_t nodes);
+  double dist(std::uint32_t node) const { return label_[node].dist; }
+  // Lowers node's distance to key (which must be smaller), inserting it if not in the heap.
+  void decrease(std::uint32_t node, double key, std::uint32_t tag);
+  bool empty() const { return heap_.empty(); }
+  std::uint32_t top_node() const { return heap_.front().node; }  // heap not empty
+  Entry pop();  // the entry of least key; its node keeps its distance
+
+ private:
+  struct Label {
+    double dist;
+    std::uint32_t slot;  // heap index + 1, 0: not in the heap
   };
   void sift_up(std::size_t i, Entry e);
   std::vector<Entry> heap_;
-  std::vector<std::uint32_t> pos_;  // node -> heap index + 1, 0: not in the heap
+  std::vector<Label> label_;
 };
 
 // Dijkstra on a SteinerGraph from one surface point to many. Holds per-query scratch memory:
@@ -137,8 +188,7 @@ class GeodesicQuery {
 
  private:
   const SteinerGraph& g_;
-  std::vector<double> dist_;
-  NodeHeap heap_;
+  LabelHeap labels_;
   std::vector<std::int32_t> face_target_head_;  // first target in a face, -1: none
   std::vector<std::int32_t> target_next_;
   std::vector<std::uint32_t> nodes_;
