@@ -3,6 +3,10 @@
 
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <functional>
+#include <limits>
+#include <queue>
+#include <random>
 
 #include "core/surface_sampling.hpp"
 #include "support/exact_geodesic.hpp"
@@ -25,7 +29,88 @@ core::TriMesh grid_mesh(int w, int h, double cell, const std::function<double(in
   return m;
 }
 
+// Textbook Dijkstra on the explicit Steiner graph: every pair of a face's boundary nodes joined,
+// no pruning. Distances from source to each target, as GeodesicQuery defines them.
+std::vector<double> full_graph_distances(const core::SteinerGraph& g,
+                                         const core::SurfacePoint& source,
+                                         const std::vector<core::SurfacePoint>& targets) {
+  const auto& mesh = g.mesh();
+  const std::size_t n = g.node_count();
+  auto len = [](const double* a, const double* b) {
+    return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                     (a[2] - b[2]) * (a[2] - b[2]));
+  };
+  std::vector<std::vector<std::uint32_t>> node_faces(n);
+  std::vector<std::vector<std::uint32_t>> face_nodes(mesh.faces.size());
+  for (std::uint32_t f = 0; f < mesh.faces.size(); ++f) {
+    g.face_nodes(f, face_nodes[f]);
+    for (auto v : face_nodes[f]) node_faces[v].push_back(f);
+  }
+  std::vector<double> dist(n, std::numeric_limits<double>::infinity());
+  using Item = std::pair<double, std::uint32_t>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> heap;
+  const double src[3] = {source.x, source.y, source.z};
+  for (auto v : face_nodes[source.face]) {
+    dist[v] = len(src, g.position(v));
+    heap.push({dist[v], v});
+  }
+  while (!heap.empty()) {
+    const auto [d, u] = heap.top();
+    heap.pop();
+    if (d > dist[u]) continue;
+    for (auto f : node_faces[u]) {
+      for (auto v : face_nodes[f]) {
+        const double nd = d + len(g.position(u), g.position(v));
+        if (nd < dist[v]) {
+          dist[v] = nd;
+          heap.push({nd, v});
+        }
+      }
+    }
+  }
+  std::vector<double> out;
+  for (const auto& t : targets) {
+    const double q[3] = {t.x, t.y, t.z};
+    double best = t.face == source.face ? len(src, q) : std::numeric_limits<double>::infinity();
+    for (auto v : face_nodes[t.face]) best = std::min(best, dist[v] + len(g.position(v), q));
+    out.push_back(best);
+  }
+  return out;
+}
+
 }  // namespace
+
+TEST_CASE("the pruned Dijkstra gives the distances of the full Steiner graph", "[core][geodesic]") {
+  // Rough random heights on a grid whose inner vertices are jittered (irregular faces, edges
+  // of many lengths, so 0 to 6 Steiner points per edge), with boundary edges.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> height(0.0, 60.0), jitter(-3.0, 3.0);
+  const int w = 14, h = 11;
+  auto m = grid_mesh(w, h, 10.0, [&](int, int) { return height(rng); });
+  for (int r = 1; r + 1 < h; ++r) {
+    for (int c = 1; c + 1 < w; ++c) {
+      m.xyz[3 * (r * w + c)] += jitter(rng);
+      m.xyz[3 * (r * w + c) + 1] += jitter(rng);
+    }
+  }
+  for (double delta : {25.0, 9.0, 4.0}) {
+    CAPTURE(delta);
+    const core::SteinerGraph g(m, delta);
+    core::GeodesicQuery q(g);
+    const auto pts = core::sample_uniform(m, 16, 11);
+    std::vector<double> d;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      std::vector<core::SurfacePoint> targets(pts.begin(), pts.end());
+      targets.erase(targets.begin() + static_cast<std::ptrdiff_t>(i));
+      q.distances(pts[i], targets, d);
+      const auto full = full_graph_distances(g, pts[i], targets);
+      for (std::size_t j = 0; j < targets.size(); ++j) {
+        CAPTURE(i, j);
+        CHECK(d[j] == Approx(full[j]).epsilon(1e-12));
+      }
+    }
+  }
+}
 
 TEST_CASE("Steiner points: floor(len / delta) inside every edge", "[core][geodesic]") {
   // One unit square split in two: 4 edges of length 1, a diagonal of sqrt(2).
