@@ -70,6 +70,9 @@ void BM_dijkstra_one_source(benchmark::State& state) {
   }
   const double nodes = static_cast<double>(s->graph->node_count());
   state.counters["graph_nodes"] = nodes;
+  state.counters["buckets"] = query.uses_buckets() ? 1 : 0;
+  state.counters["min_seg_m"] = s->graph->min_segment();
+  state.counters["max_seg_m"] = s->graph->max_segment();
   state.counters["nodes/s"] =
       benchmark::Counter(nodes * state.iterations(), benchmark::Counter::kIsRate);
 }

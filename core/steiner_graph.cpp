@@ -59,12 +59,12 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
     if (i > 0 && std::get<0>(e[i]) == std::get<0>(e[i - 1])) continue;
     ++edge_count;
     const std::uint64_t key = std::get<0>(e[i]);
-    nodes += std::floor(dist3(&mesh.xyz[3 * (key >> 32)], &mesh.xyz[3 * (key & 0xFFFFFFFFu)]) /
-                        delta);
+    nodes +=
+        std::floor(dist3(&mesh.xyz[3 * (key >> 32)], &mesh.xyz[3 * (key & 0xFFFFFFFFu)]) / delta);
   }
   if (!(nodes < static_cast<double>(kMaxNodes))) {
-    throw std::invalid_argument("too many Steiner points (" + std::to_string(nodes) +
-                                "; at most " + std::to_string(kMaxNodes) + ")");
+    throw std::invalid_argument("too many Steiner points (" + std::to_string(nodes) + "; at most " +
+                                std::to_string(kMaxNodes) + ")");
   }
   nodes_.reserve(static_cast<std::size_t>(nodes));
   for (std::size_t v = 0; v < nv; ++v) {
@@ -84,7 +84,8 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
       face_edges_[std::get<1>(e[i])][std::get<2>(e[i])] = edge;
     }
     Edge rec;
-    rec.ends = {static_cast<std::uint32_t>(key >> 32), static_cast<std::uint32_t>(key & 0xFFFFFFFFu)};
+    rec.ends = {static_cast<std::uint32_t>(key >> 32),
+                static_cast<std::uint32_t>(key & 0xFFFFFFFFu)};
     for (int side = 0; side < 2; ++side) rec.sides[side].face = faces[side];
     edges_.push_back(rec);
     // floor(len / delta) points evenly inside the edge.
@@ -93,9 +94,8 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
     const auto k = static_cast<std::uint32_t>(std::floor(dist3(a, b) / delta));
     for (std::uint32_t j = 1; j <= k; ++j) {
       const double t = static_cast<double>(j) / (k + 1);
-      nodes_.push_back({{a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]),
-                         a[2] + t * (b[2] - a[2])},
-                        edge});
+      nodes_.push_back(
+          {{a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])}, edge});
     }
     edge_first_.push_back(static_cast<std::uint32_t>(nodes_.size()));
   }
@@ -116,6 +116,40 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
       }
     }
   }
+  // Segment length bounds. Two distinct nodes of a face lie on one edge (at least its node
+  // spacing apart) or on two edges meeting at a corner with angle t: then one of them is at
+  // least its edge's spacing s from the corner, and so at least s min(1, sin t) from the other
+  // edge. The longest segment is the face's longest edge.
+  auto spacing = [&](std::uint32_t e, double len) {
+    return len / static_cast<double>(edge_first_[e + 1] - edge_first_[e] + 1);
+  };
+  min_segment_ = std::numeric_limits<double>::infinity();
+  for (std::uint32_t f = 0; f < mesh.faces.size(); ++f) {
+    const double* p[3];
+    for (int i = 0; i < 3; ++i) p[i] = &mesh.xyz[3 * mesh.faces[f][i]];
+    double len[3], s[3];
+    for (int i = 0; i < 3; ++i) {
+      len[i] = dist3(p[i], p[(i + 1) % 3]);  // edge i runs from corner i to corner i + 1
+      s[i] = spacing(face_edges_[f][i], len[i]);
+      max_segment_ = std::max(max_segment_, len[i]);
+    }
+    for (int i = 0; i < 3; ++i) {
+      // Corner i joins edge i and edge i + 2.
+      const int j = (i + 2) % 3;
+      double a[3], b[3];
+      for (int c = 0; c < 3; ++c) {
+        a[c] = p[(i + 1) % 3][c] - p[i][c];
+        b[c] = p[j][c] - p[i][c];
+      }
+      const double cx = a[1] * b[2] - a[2] * b[1], cy = a[2] * b[0] - a[0] * b[2],
+                   cz = a[0] * b[1] - a[1] * b[0];
+      const double sin_t = std::sqrt(cx * cx + cy * cy + cz * cz) / (len[i] * len[j]);
+      const double dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+      const double factor = dot <= 0 ? 1.0 : std::min(1.0, sin_t);
+      min_segment_ = std::min(min_segment_, std::min(s[i], s[j]) * factor);
+    }
+  }
+  if (!(min_segment_ > 0) || mesh.faces.empty()) min_segment_ = 0;
   // Vertex -> its corners, CSR.
   corner_first_.assign(nv + 1, 0);
   for (const auto& f : mesh.faces) {
@@ -183,7 +217,8 @@ void LabelHeap::decrease(std::uint32_t node, double key, std::uint32_t tag) {
   }
 }
 
-LabelHeap::Entry LabelHeap::pop() {
+bool LabelHeap::pop(Entry& out) {
+  if (heap_.empty()) return false;
   const Entry top = heap_.front();
   label_[top.node].slot = 0;
   const Entry last = heap_.back();
@@ -208,18 +243,85 @@ LabelHeap::Entry LabelHeap::pop() {
     heap_[i] = last;
     label_[last.node].slot = static_cast<std::uint32_t>(i + 1);
   }
-  return top;
+  out = top;
+  return true;
 }
 
-GeodesicQuery::GeodesicQuery(const SteinerGraph& graph)
-    : g_(graph), face_target_head_(graph.mesh().faces.size(), -1) {}
+std::size_t BucketQueue::ring_size(const SteinerGraph& graph) {
+  // note: the width keeps a relative margin below the shortest edge, so that rounding cannot
+  // put a node relaxed from bucket b back into bucket b.
+  const double width = graph.min_segment() * (1 - 1e-6);
+  if (!(width > 0)) return 0;
+  const double ring = std::floor(graph.max_segment() / width) + 2;
+  constexpr double kMaxRing = 1 << 16;  // beyond this the empty buckets cost more than a heap
+  return ring <= kMaxRing ? static_cast<std::size_t>(ring) : 0;
+}
+
+BucketQueue::BucketQueue(const SteinerGraph& graph)
+    : width_(graph.min_segment() * (1 - 1e-6)), ring_(ring_size(graph)) {}
+
+void BucketQueue::reset(std::size_t nodes) {
+  for (auto& b : ring_) b.clear();
+  label_.assign(nodes, {std::numeric_limits<double>::infinity(), 0, 0});
+  bucket_ = 0;
+  next_ = 0;
+  queued_ = 0;
+}
+
+void BucketQueue::decrease(std::uint32_t node, double key, std::uint32_t tag) {
+  label_[node].dist = key;
+  label_[node].tag = tag;
+  // note: b >= bucket_ (a distance never falls below the bucket being emptied: its nodes are
+  // at least one width from the others) but for rounding, which the max guards against; and
+  // b < bucket_ + ring size (no edge is longer than max_segment()).
+  const auto b = static_cast<std::uint64_t>(key / width_);
+  ring_[std::max(b, bucket_) % ring_.size()].push_back(node);
+  ++queued_;
+}
+
+bool BucketQueue::pop(Entry& out) {
+  while (queued_ > 0) {
+    auto& bucket = ring_[bucket_ % ring_.size()];
+    if (next_ == bucket.size()) {
+      bucket.clear();
+      next_ = 0;
+      ++bucket_;
+      continue;
+    }
+    const std::uint32_t node = bucket[next_++];
+    --queued_;
+    Label& l = label_[node];
+    if (l.settled) continue;  // lowered since, and settled from an earlier bucket
+    l.settled = 1;
+    out = {l.dist, node, l.tag};
+    return true;
+  }
+  return false;
+}
+
+GeodesicQuery::GeodesicQuery(const SteinerGraph& graph, bool use_buckets)
+    : g_(graph), face_target_head_(graph.mesh().faces.size(), -1) {
+  if (use_buckets && BucketQueue::ring_size(graph) > 0) {
+    buckets_ = std::make_unique<BucketQueue>(graph);
+  }
+}
 
 void GeodesicQuery::distances(const SurfacePoint& source, const std::vector<SurfacePoint>& targets,
                               std::vector<double>& out) {
+  out.assign(targets.size(), std::numeric_limits<double>::infinity());
+  if (targets.empty()) return;
+  if (buckets_) {
+    run(*buckets_, source, targets, out);
+  } else {
+    run(heap_, source, targets, out);
+  }
+}
+
+template <typename Queue>
+void GeodesicQuery::run(Queue& labels_, const SurfacePoint& source,
+                        const std::vector<SurfacePoint>& targets, std::vector<double>& out) {
   const double inf = std::numeric_limits<double>::infinity();
   const std::size_t n = g_.node_count();
-  out.assign(targets.size(), inf);
-  if (targets.empty()) return;
   // Targets are extra nodes n + j, reached from their face's boundary nodes.
   target_next_.assign(targets.size(), -1);
   for (std::size_t j = 0; j < targets.size(); ++j) {
@@ -231,8 +333,7 @@ void GeodesicQuery::distances(const SurfacePoint& source, const std::vector<Surf
   // Relaxes from a point p at distance d into face f: its boundary nodes and its targets.
   // note: a node improves only if |p v| < dist(v) - d; comparing squares first skips the
   // square root for the many relaxations that cannot improve (settled or nearer nodes).
-  auto relax = [&](std::uint32_t v, const double* p, const double* q, double d,
-                   std::uint32_t via) {
+  auto relax = [&](std::uint32_t v, const double* p, const double* q, double d, std::uint32_t via) {
     const double old = labels_.dist(v);
     const double gap = old - d;
     if (!(gap > 0)) return;
@@ -258,23 +359,25 @@ void GeodesicQuery::distances(const SurfacePoint& source, const std::vector<Surf
   };
   relax_face(source.face, src, 0.0);
   std::size_t remaining = targets.size();
-  while (!labels_.empty() && remaining > 0) {
-    const LabelHeap::Entry top = labels_.pop();
+  double stop = inf;  // once every target is settled: where their distances are final
+  LabelHeap::Entry top;
+  while (labels_.pop(top) && top.key < stop) {
     const double d = top.key;
     const std::uint32_t u = top.node;
-    // The next node to settle, most likely: its records load while this one relaxes.
-    if (!labels_.empty() && labels_.top_node() < n) g_.prefetch(labels_.top_node());
     if (u >= n) {
-      out[u - n] = d;
-      --remaining;
+      if (--remaining == 0) stop = labels_.final_below(d);
       continue;
     }
+    // The next node to settle, most likely: its records load while this one relaxes.
+    const std::uint32_t next = labels_.next_hint();
+    if (next < n) g_.prefetch(next);
     const double* p = g_.position(u);
     g_.for_each_neighbour(
         u, top.tag,
         [&](std::uint32_t v, std::uint32_t via) { relax(v, p, g_.position(v), d, via); },
         [&](std::uint32_t f) { relax_targets(f, p, d); });
   }
+  for (std::size_t j = 0; j < targets.size(); ++j) out[j] = labels_.dist(n + j);
   for (const auto& t : targets) face_target_head_[t.face] = -1;
 }
 

@@ -6,8 +6,10 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace dpts::core {
@@ -55,6 +57,12 @@ class SteinerGraph {
       __builtin_prefetch(&corners_[corner_first_[node]]);
     }
   }
+
+  // Bounds on the length of a graph edge (a segment between two nodes of one face): every one
+  // is at least min_segment() and at most max_segment(). min_segment() is 0 when some face is
+  // degenerate (a zero angle).
+  double min_segment() const { return min_segment_; }
+  double max_segment() const { return max_segment_; }
 
   // The nodes on face f's boundary (its corners and its edges' Steiner points), into out.
   void face_nodes(std::uint32_t f, std::vector<std::uint32_t>& out) const;
@@ -114,6 +122,7 @@ class SteinerGraph {
  private:
   const TriMesh& mesh_;
   double delta_;
+  double min_segment_ = 0, max_segment_ = 0;
   static constexpr std::uint32_t kNoEdge = 0xFFFFFFFFu;
   struct Node {  // vertices first, then each edge's Steiner points
     std::array<double, 3> p;
@@ -121,7 +130,7 @@ class SteinerGraph {
   };
   std::vector<Node> nodes_;
   std::vector<std::array<std::uint32_t, 3>> face_edges_;  // edge of (v0,v1), (v1,v2), (v2,v0)
-  std::vector<std::uint32_t> edge_first_;  // first Steiner node of each edge, + end
+  std::vector<std::uint32_t> edge_first_;                 // first Steiner node of each edge, + end
   // note: Dijkstra's time goes into cache misses, one per dependent load; so what a settled node
   // needs is gathered in one record: an edge's (one cache line) for a Steiner point, its
   // corners' (contiguous) for a vertex.
@@ -130,14 +139,14 @@ class SteinerGraph {
     std::array<std::uint32_t, 2> ends{};
     struct Side {  // one face of the edge
       std::uint32_t face = kNoFace;
-      std::uint32_t opposite = 0;                // the face's corner off the edge
+      std::uint32_t opposite = 0;                   // the face's corner off the edge
       std::array<std::uint32_t, 2> first{}, end{};  // Steiner nodes of its two other edges
     };
     std::array<Side, 2> sides;
   };
-  struct Corner {               // a vertex in one of its faces
+  struct Corner {  // a vertex in one of its faces
     std::uint32_t face = 0;
-    std::array<std::uint32_t, 2> along{};  // nearest node on each of its two edges there
+    std::array<std::uint32_t, 2> along{};            // nearest node on each of its two edges there
     std::uint32_t across_first = 0, across_end = 0;  // Steiner nodes of the opposite edge
   };
   std::vector<Edge> edges_;
@@ -160,9 +169,13 @@ class LabelHeap {
   double dist(std::uint32_t node) const { return label_[node].dist; }
   // Lowers node's distance to key (which must be smaller), inserting it if not in the heap.
   void decrease(std::uint32_t node, double key, std::uint32_t tag);
-  bool empty() const { return heap_.empty(); }
-  std::uint32_t top_node() const { return heap_.front().node; }  // heap not empty
-  Entry pop();  // the entry of least key; its node keeps its distance
+  // The entry of least key into out (its node keeps its distance); false when none is left.
+  bool pop(Entry& out);
+  // The node most likely popped next (kNone: none).
+  std::uint32_t next_hint() const { return heap_.empty() ? kNone : heap_.front().node; }
+  // Distances below this are final once `key` has been popped.
+  double final_below(double key) const { return key; }
+  static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
 
  private:
   struct Label {
@@ -174,11 +187,52 @@ class LabelHeap {
   std::vector<Label> label_;
 };
 
+// Dijkstra's tentative distances in buckets of width at most the shortest graph edge (Dial's
+// queue, for real weights): a node taken from the lowest bucket can be lowered by no node of
+// that bucket, so a bucket's nodes may be settled in any order and each push and pop is O(1).
+// Lowered nodes stay behind in their old bucket and are skipped there. The buckets live in a
+// ring that spans the longest edge, which bounds the spread of the queued distances.
+class BucketQueue {
+ public:
+  using Entry = LabelHeap::Entry;
+  // The number of buckets a graph needs, 0 if they are not worth it (degenerate faces, or a
+  // longest edge too many times the shortest).
+  static std::size_t ring_size(const SteinerGraph& graph);
+  explicit BucketQueue(const SteinerGraph& graph);
+  void reset(std::size_t nodes);
+  double dist(std::uint32_t node) const { return label_[node].dist; }
+  void decrease(std::uint32_t node, double key, std::uint32_t tag);
+  // A node of the lowest bucket with its distance and tag into out, marked settled; false when
+  // none is left.
+  bool pop(Entry& out);
+  std::uint32_t next_hint() const {
+    const auto& b = ring_[bucket_ % ring_.size()];
+    return next_ < b.size() ? b[next_] : LabelHeap::kNone;
+  }
+  // Distances below this are final once `key` has been popped: the end of key's bucket.
+  double final_below(double key) const { return (std::floor(key / width_) + 1) * width_; }
+
+ private:
+  struct Label {
+    double dist;
+    std::uint32_t tag;
+    std::uint32_t settled;
+  };
+  double width_;
+  std::vector<std::vector<std::uint32_t>> ring_;
+  std::vector<Label> label_;
+  std::uint64_t bucket_ = 0;  // the bucket being emptied
+  std::size_t next_ = 0;      // its next entry
+  std::size_t queued_ = 0;    // entries in the ring, skipped ones included
+};
+
 // Dijkstra on a SteinerGraph from one surface point to many. Holds per-query scratch memory:
 // one per thread; the graph is shared read-only.
 class GeodesicQuery {
  public:
-  explicit GeodesicQuery(const SteinerGraph& graph);
+  // Uses Dial's buckets where the graph allows (BucketQueue::ring_size), else a heap;
+  // use_buckets = false forces the heap.
+  explicit GeodesicQuery(const SteinerGraph& graph, bool use_buckets = true);
 
   // Distances from source to each target: min over boundary nodes u of the source's face and
   // v of the target's face of |source u| + path(u, v) + |v target| (and the straight segment
@@ -186,9 +240,16 @@ class GeodesicQuery {
   void distances(const SurfacePoint& source, const std::vector<SurfacePoint>& targets,
                  std::vector<double>& out);
 
+  // Whether the queries use Dial's buckets (else the heap); same distances up to rounding.
+  bool uses_buckets() const { return buckets_ != nullptr; }
+
  private:
+  template <typename Queue>
+  void run(Queue& queue, const SurfacePoint& source, const std::vector<SurfacePoint>& targets,
+           std::vector<double>& out);
   const SteinerGraph& g_;
-  LabelHeap labels_;
+  LabelHeap heap_;
+  std::unique_ptr<BucketQueue> buckets_;
   std::vector<std::int32_t> face_target_head_;  // first target in a face, -1: none
   std::vector<std::int32_t> target_next_;
   std::vector<std::uint32_t> nodes_;

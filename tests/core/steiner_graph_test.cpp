@@ -94,22 +94,47 @@ TEST_CASE("the pruned Dijkstra gives the distances of the full Steiner graph", "
     }
   }
   for (double delta : {25.0, 9.0, 4.0}) {
-    CAPTURE(delta);
-    const core::SteinerGraph g(m, delta);
-    core::GeodesicQuery q(g);
-    const auto pts = core::sample_uniform(m, 16, 11);
-    std::vector<double> d;
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-      std::vector<core::SurfacePoint> targets(pts.begin(), pts.end());
-      targets.erase(targets.begin() + static_cast<std::ptrdiff_t>(i));
-      q.distances(pts[i], targets, d);
-      const auto full = full_graph_distances(g, pts[i], targets);
-      for (std::size_t j = 0; j < targets.size(); ++j) {
-        CAPTURE(i, j);
-        CHECK(d[j] == Approx(full[j]).epsilon(1e-12));
+    for (bool buckets : {true, false}) {
+      CAPTURE(delta, buckets);
+      const core::SteinerGraph g(m, delta);
+      core::GeodesicQuery q(g, buckets);
+      CHECK(q.uses_buckets() == buckets);
+      const auto pts = core::sample_uniform(m, 16, 11);
+      std::vector<double> d;
+      for (std::size_t i = 0; i < pts.size(); ++i) {
+        std::vector<core::SurfacePoint> targets(pts.begin(), pts.end());
+        targets.erase(targets.begin() + static_cast<std::ptrdiff_t>(i));
+        q.distances(pts[i], targets, d);
+        const auto full = full_graph_distances(g, pts[i], targets);
+        for (std::size_t j = 0; j < targets.size(); ++j) {
+          CAPTURE(i, j);
+          CHECK(d[j] == Approx(full[j]).epsilon(1e-12));
+        }
       }
     }
   }
+}
+
+TEST_CASE("segment bounds: Dial's buckets only where no face is degenerate", "[core][geodesic]") {
+  // A right triangle with legs 4 and 3 (hypotenuse 5), delta 2: 2, 1 and 2 Steiner points,
+  // spacings 4/3, 3/2 and 5/3. Bound per corner: min of its two spacings times min(1, sin):
+  // right angle 4/3; at (4,0) (sin 3/5) 4/3 * 0.6 = 0.8; at (0,3) (sin 4/5) 1.5 * 0.8 = 1.2.
+  // (The true shortest segment there is 1: (8/3,0) to (8/3,1).)
+  core::TriMesh m;
+  m.xyz = {0, 0, 0, 4, 0, 0, 0, 3, 0};
+  m.faces = {{0, 1, 2}};
+  const core::SteinerGraph g(m, 2.0);
+  CHECK(g.steiner_count() == 5);
+  CHECK(g.max_segment() == Approx(5.0));
+  CHECK(g.min_segment() == Approx(0.8));
+  CHECK(core::GeodesicQuery(g).uses_buckets());
+  // A flat (zero-angle) face: no positive bound, so the heap.
+  core::TriMesh flat;
+  flat.xyz = {0, 0, 0, 4, 0, 0, 8, 0, 0};
+  flat.faces = {{0, 1, 2}};
+  const core::SteinerGraph gf(flat, 2.0);
+  CHECK(gf.min_segment() == 0);
+  CHECK_FALSE(core::GeodesicQuery(gf).uses_buckets());
 }
 
 TEST_CASE("Steiner points: floor(len / delta) inside every edge", "[core][geodesic]") {
