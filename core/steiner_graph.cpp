@@ -324,7 +324,9 @@ void GeodesicQuery::run(Queue& labels_, const SurfacePoint& source,
   const std::size_t n = g_.node_count();
   // Targets are extra nodes n + j, reached from their face's boundary nodes.
   target_next_.assign(targets.size(), -1);
+  target_faces_.assign((g_.mesh().faces.size() + 63) / 64, 0);
   for (std::size_t j = 0; j < targets.size(); ++j) {
+    target_faces_[targets[j].face >> 6] |= std::uint64_t{1} << (targets[j].face & 63);
     target_next_[j] = face_target_head_[targets[j].face];
     face_target_head_[targets[j].face] = static_cast<std::int32_t>(j);
   }
@@ -347,6 +349,7 @@ void GeodesicQuery::run(Queue& labels_, const SurfacePoint& source,
     }
   };
   auto relax_targets = [&](std::uint32_t f, const double* p, double d) {
+    if (!(target_faces_[f >> 6] >> (f & 63) & 1)) return;
     for (std::int32_t j = face_target_head_[f]; j >= 0; j = target_next_[j]) {
       const double q[3] = {targets[j].x, targets[j].y, targets[j].z};
       relax(static_cast<std::uint32_t>(n + j), p, q, d, SteinerGraph::kAnywhere);
@@ -369,8 +372,16 @@ void GeodesicQuery::run(Queue& labels_, const SurfacePoint& source,
       continue;
     }
     // The next node to settle, most likely: its records load while this one relaxes.
-    const std::uint32_t next = labels_.next_hint();
+    // note: in a bucket the order is known several nodes ahead: their labels and positions are
+    // fetched three nodes ahead, their edge or corner records (found through the position
+    // record) one ahead.
+    const std::uint32_t next = labels_.next_hint(0);
     if (next < n) g_.prefetch(next);
+    const std::uint32_t later = labels_.next_hint(3);
+    if (later < n) {
+      g_.prefetch_position(later);
+      labels_.prefetch_label(later);
+    }
     const double* p = g_.position(u);
     g_.for_each_neighbour(
         u, top.tag,

@@ -48,6 +48,7 @@ class SteinerGraph {
 
   // Hints the cache about what for_each_neighbour(node) will read: Dijkstra calls it when it
   // first reaches a node, long before the node is settled.
+  void prefetch_position(std::uint32_t node) const { __builtin_prefetch(&nodes_[node]); }
   void prefetch(std::uint32_t node) const {
     __builtin_prefetch(&nodes_[node]);
     const std::uint32_t e = nodes_[node].edge;
@@ -172,7 +173,11 @@ class LabelHeap {
   // The entry of least key into out (its node keeps its distance); false when none is left.
   bool pop(Entry& out);
   // The node most likely popped next (kNone: none).
-  std::uint32_t next_hint() const { return heap_.empty() ? kNone : heap_.front().node; }
+  // The node most likely popped after `ahead` others (kNone: none known).
+  std::uint32_t next_hint(std::size_t ahead) const {
+    return ahead == 0 && !heap_.empty() ? heap_.front().node : kNone;
+  }
+  void prefetch_label(std::uint32_t) const {}
   // Distances below this are final once `key` has been popped.
   double final_below(double key) const { return key; }
   static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
@@ -205,10 +210,11 @@ class BucketQueue {
   // A node of the lowest bucket with its distance and tag into out, marked settled; false when
   // none is left.
   bool pop(Entry& out);
-  std::uint32_t next_hint() const {
+  std::uint32_t next_hint(std::size_t ahead) const {
     const auto& b = ring_[bucket_ % ring_.size()];
-    return next_ < b.size() ? b[next_] : LabelHeap::kNone;
+    return next_ + ahead < b.size() ? b[next_ + ahead] : LabelHeap::kNone;
   }
+  void prefetch_label(std::uint32_t node) const { __builtin_prefetch(&label_[node]); }
   // Distances below this are final once `key` has been popped: the end of key's bucket.
   double final_below(double key) const { return (std::floor(key / width_) + 1) * width_; }
 
@@ -251,6 +257,7 @@ class GeodesicQuery {
   LabelHeap heap_;
   std::unique_ptr<BucketQueue> buckets_;
   std::vector<std::int32_t> face_target_head_;  // first target in a face, -1: none
+  std::vector<std::uint64_t> target_faces_;     // bit per face: has a target (fits in cache)
   std::vector<std::int32_t> target_next_;
   std::vector<std::uint32_t> nodes_;
 };
