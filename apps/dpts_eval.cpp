@@ -210,6 +210,8 @@ int run(const Options& o) {
         rmse, vmax, measured, uncovered);
     std::printf("steiner graphs   delta %.4f m: T %zu nodes (%.2f s), T' %zu nodes (%.2f s)\n",
                 r.delta_m, r.original_nodes, r.original_s, r.simplified_nodes, r.simplified_s);
+    std::printf("searched         %.1f %% of T, %.1f %% of T' per query on average\n",
+                100 * r.original_searched, 100 * r.simplified_searched);
     for (std::size_t i = 0; i < r.set_errors.size(); ++i) {
       std::printf("distance error   set %zu: %.6f\n", i + 1, r.set_errors[i]);
     }
@@ -235,6 +237,8 @@ int run(const Options& o) {
                      .add("delta_m", r.delta_m)
                      .add("steiner_nodes_dem", r.original_nodes)
                      .add("steiner_nodes_mesh", r.simplified_nodes)
+                     .add("searched_share_dem", r.original_searched)
+                     .add("searched_share_mesh", r.simplified_searched)
                      .add("snapped_points", r.snapped)
                      .add("faces_not_ccw", mc.clockwise_or_flat)
                      .add("bad_edges", mc.bad_edges)

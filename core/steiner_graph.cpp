@@ -191,6 +191,7 @@ void SteinerGraph::face_nodes(std::uint32_t f, std::vector<std::uint32_t>& out) 
 
 void LabelHeap::reset(std::size_t nodes) {
   heap_.clear();
+  finished_ = false;
   label_.assign(nodes, {std::numeric_limits<double>::infinity(), 0});
 }
 
@@ -218,7 +219,7 @@ void LabelHeap::decrease(std::uint32_t node, double key, std::uint32_t tag) {
 }
 
 bool LabelHeap::pop(Entry& out) {
-  if (heap_.empty()) return false;
+  if (heap_.empty() || finished_) return false;
   const Entry top = heap_.front();
   label_[top.node].slot = 0;
   const Entry last = heap_.back();
@@ -266,6 +267,7 @@ void BucketQueue::reset(std::size_t nodes) {
   bucket_ = 0;
   next_ = 0;
   queued_ = 0;
+  finished_ = false;
 }
 
 void BucketQueue::decrease(std::uint32_t node, double key, std::uint32_t tag) {
@@ -283,6 +285,7 @@ bool BucketQueue::pop(Entry& out) {
   while (queued_ > 0) {
     auto& bucket = ring_[bucket_ % ring_.size()];
     if (next_ == bucket.size()) {
+      if (finished_) return false;
       bucket.clear();
       next_ = 0;
       ++bucket_;
@@ -362,13 +365,13 @@ void GeodesicQuery::run(Queue& labels_, const SurfacePoint& source,
   };
   relax_face(source.face, src, 0.0);
   std::size_t remaining = targets.size();
-  double stop = inf;  // once every target is settled: where their distances are final
   LabelHeap::Entry top;
-  while (labels_.pop(top) && top.key < stop) {
+  settled_ = 0;
+  while (labels_.pop(top)) {
     const double d = top.key;
     const std::uint32_t u = top.node;
     if (u >= n) {
-      if (--remaining == 0) stop = labels_.final_below(d);
+      if (--remaining == 0) labels_.finish();
       continue;
     }
     // The next node to settle, most likely: its records load while this one relaxes.
@@ -382,6 +385,7 @@ void GeodesicQuery::run(Queue& labels_, const SurfacePoint& source,
       g_.prefetch_position(later);
       labels_.prefetch_label(later);
     }
+    ++settled_;
     const double* p = g_.position(u);
     g_.for_each_neighbour(
         u, top.tag,

@@ -6,7 +6,6 @@
 #pragma once
 
 #include <array>
-#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -172,14 +171,13 @@ class LabelHeap {
   void decrease(std::uint32_t node, double key, std::uint32_t tag);
   // The entry of least key into out (its node keeps its distance); false when none is left.
   bool pop(Entry& out);
-  // The node most likely popped next (kNone: none).
   // The node most likely popped after `ahead` others (kNone: none known).
   std::uint32_t next_hint(std::size_t ahead) const {
     return ahead == 0 && !heap_.empty() ? heap_.front().node : kNone;
   }
   void prefetch_label(std::uint32_t) const {}
-  // Distances below this are final once `key` has been popped.
-  double final_below(double key) const { return key; }
+  // Ends the search: pop answers false from now on (every popped distance is final).
+  void finish() { finished_ = true; }
   static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
 
  private:
@@ -190,6 +188,7 @@ class LabelHeap {
   void sift_up(std::size_t i, Entry e);
   std::vector<Entry> heap_;
   std::vector<Label> label_;
+  bool finished_ = false;
 };
 
 // Dijkstra's tentative distances in buckets of width at most the shortest graph edge (Dial's
@@ -215,8 +214,9 @@ class BucketQueue {
     return next_ + ahead < b.size() ? b[next_ + ahead] : LabelHeap::kNone;
   }
   void prefetch_label(std::uint32_t node) const { __builtin_prefetch(&label_[node]); }
-  // Distances below this are final once `key` has been popped: the end of key's bucket.
-  double final_below(double key) const { return (std::floor(key / width_) + 1) * width_; }
+  // Ends the search once the current bucket is emptied: a distance popped from it is final
+  // only then (a target's last segment may be shorter than the width).
+  void finish() { finished_ = true; }
 
  private:
   struct Label {
@@ -230,6 +230,7 @@ class BucketQueue {
   std::uint64_t bucket_ = 0;  // the bucket being emptied
   std::size_t next_ = 0;      // its next entry
   std::size_t queued_ = 0;    // entries in the ring, skipped ones included
+  bool finished_ = false;
 };
 
 // Dijkstra on a SteinerGraph from one surface point to many. Holds per-query scratch memory:
@@ -246,6 +247,9 @@ class GeodesicQuery {
   void distances(const SurfacePoint& source, const std::vector<SurfacePoint>& targets,
                  std::vector<double>& out);
 
+  // Graph nodes the last query settled (the area it searched).
+  std::size_t settled() const { return settled_; }
+
   // Whether the queries use Dial's buckets (else the heap); same distances up to rounding.
   bool uses_buckets() const { return buckets_ != nullptr; }
 
@@ -260,6 +264,7 @@ class GeodesicQuery {
   std::vector<std::uint64_t> target_faces_;     // bit per face: has a target (fits in cache)
   std::vector<std::int32_t> target_next_;
   std::vector<std::uint32_t> nodes_;
+  std::size_t settled_ = 0;
 };
 
 }  // namespace dpts::core

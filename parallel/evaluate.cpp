@@ -16,7 +16,8 @@
 namespace dpts::par {
 
 std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
-                                       const std::vector<core::SurfacePoint>& points) {
+                                       const std::vector<core::SurfacePoint>& points,
+                                       double* settled) {
   const std::size_t k = points.size();
   std::vector<double> out(k * k, 0.0);
   // Each pair is measured once, by a Dijkstra from the endpoint that ranks the other nearer
@@ -49,6 +50,7 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
       }
     }
   }
+  std::vector<std::size_t> settled_by(k, 0);  // per source: the same sum for any thread count
   tbb::enumerable_thread_specific<std::unique_ptr<core::GeodesicQuery>> queries;
   // note: grain 1: query costs differ a lot; let the scheduler balance them.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, k, 1),
@@ -62,12 +64,16 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
                         targets.clear();
                         for (std::size_t j : assigned[i]) targets.push_back(points[j]);
                         q->distances(points[i], targets, d);
+                        settled_by[i] = q->settled();
                         for (std::size_t t = 0; t < assigned[i].size(); ++t) {
                           const std::size_t j = assigned[i][t];
                           out[std::min(i, j) * k + std::max(i, j)] = d[t];
                         }
                       }
                     });
+  if (settled) {
+    for (std::size_t n : settled_by) *settled += static_cast<double>(n);
+  }
   return out;
 }
 
@@ -87,6 +93,7 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
         std::to_string(result.simplified_nodes) + " nodes");
   const core::PointLocator locate_s(simplified);
   const auto k = static_cast<std::size_t>(options.points);
+  double settled_t = 0, settled_s = 0;
   for (int set = 0; set < options.sets; ++set) {
     const std::uint64_t seed =
         options.seed * 0x9E3779B97F4A7C15ull + static_cast<std::uint64_t>(set) + 1;
@@ -111,10 +118,10 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
         "set " + std::to_string(set + 1) + "/" + std::to_string(options.sets);
     stage(set_name + ": geodesics on T");
     auto t0 = std::chrono::steady_clock::now();
-    const std::vector<double> dt = pairwise_distances(graph_t, on_t);
+    const std::vector<double> dt = pairwise_distances(graph_t, on_t, &settled_t);
     auto t1 = std::chrono::steady_clock::now();
     stage(set_name + ": geodesics on T'");
-    const std::vector<double> ds = pairwise_distances(graph_s, on_s);
+    const std::vector<double> ds = pairwise_distances(graph_s, on_s, &settled_s);
     auto t2 = std::chrono::steady_clock::now();
     result.original_s += std::chrono::duration<double>(t1 - t0).count();
     result.simplified_s += std::chrono::duration<double>(t2 - t1).count();
@@ -130,6 +137,12 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
       }
     }
     result.set_errors.push_back(pairs ? sum / pairs : 0.0);
+  }
+  // note: k queries per set, one per source (a source with no pair to measure settles none).
+  const double queries = static_cast<double>(k) * options.sets;
+  if (queries > 0) {
+    result.original_searched = settled_t / (queries * result.original_nodes);
+    result.simplified_searched = settled_s / (queries * result.simplified_nodes);
   }
   double total = 0.0;
   for (double e : result.set_errors) total += e;

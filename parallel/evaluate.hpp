@@ -14,8 +14,10 @@ namespace dpts::par {
 // Geodesic distances between all pairs of points on the graph's mesh: out[i * K + j] for
 // i < j (the rest 0). One sequential Dijkstra per source i (to the targets j > i), sources
 // spread over oneTBB tasks, scratch per thread: the figures are the same for any thread count.
+// If `settled` is given, the graph nodes settled by all the queries are added to it.
 std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
-                                       const std::vector<core::SurfacePoint>& points);
+                                       const std::vector<core::SurfacePoint>& points,
+                                       double* settled = nullptr);
 
 struct EvalOptions {
   int points = 100;  // K points per set
@@ -35,6 +37,8 @@ struct EvalResult {
   std::size_t original_nodes = 0, simplified_nodes = 0;  // Steiner graph sizes
   std::size_t snapped = 0;                               // sample points snapped onto T'
   double original_s = 0, simplified_s = 0;  // wall time of the geodesics on T and on T'
+  // Mean share of the graph one Dijkstra query settled, on T and on T'.
+  double original_searched = 0, simplified_searched = 0;
 };
 
 // Samples K points uniformly in T's footprint per set (seeded by seed and set), lifts them onto
