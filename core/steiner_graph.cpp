@@ -321,7 +321,7 @@ void GeodesicQuery::distances(const SurfacePoint& source, const std::vector<Surf
 }
 
 template <typename Queue>
-void GeodesicQuery::run(Queue& labels_, const SurfacePoint& source,
+void GeodesicQuery::run(Queue& queue, const SurfacePoint& source,
                         const std::vector<SurfacePoint>& targets, std::vector<double>& out) {
   const double inf = std::numeric_limits<double>::infinity();
   const std::size_t n = g_.node_count();
@@ -333,13 +333,13 @@ void GeodesicQuery::run(Queue& labels_, const SurfacePoint& source,
     target_next_[j] = face_target_head_[targets[j].face];
     face_target_head_[targets[j].face] = static_cast<std::int32_t>(j);
   }
-  labels_.reset(n + targets.size());
+  queue.reset(n + targets.size());
   const double src[3] = {source.x, source.y, source.z};
   // Relaxes from a point p at distance d into face f: its boundary nodes and its targets.
   // note: a node improves only if |p v| < dist(v) - d; comparing squares first skips the
   // square root for the many relaxations that cannot improve (settled or nearer nodes).
   auto relax = [&](std::uint32_t v, const double* p, const double* q, double d, std::uint32_t via) {
-    const double old = labels_.dist(v);
+    const double old = queue.dist(v);
     const double gap = old - d;
     if (!(gap > 0)) return;
     const double dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
@@ -348,7 +348,7 @@ void GeodesicQuery::run(Queue& labels_, const SurfacePoint& source,
     const double nd = d + std::sqrt(w2);
     if (nd < old) {
       if (old == inf && v < n) g_.prefetch(v);
-      labels_.decrease(v, nd, via);
+      queue.decrease(v, nd, via);
     }
   };
   auto relax_targets = [&](std::uint32_t f, const double* p, double d) {
@@ -367,23 +367,23 @@ void GeodesicQuery::run(Queue& labels_, const SurfacePoint& source,
   std::size_t remaining = targets.size();
   LabelHeap::Entry top;
   settled_ = 0;
-  while (labels_.pop(top)) {
+  while (queue.pop(top)) {
     const double d = top.key;
     const std::uint32_t u = top.node;
     if (u >= n) {
-      if (--remaining == 0) labels_.finish();
+      if (--remaining == 0) queue.finish();
       continue;
     }
     // The next node to settle, most likely: its records load while this one relaxes.
     // note: in a bucket the order is known several nodes ahead: their labels and positions are
     // fetched three nodes ahead, their edge or corner records (found through the position
     // record) one ahead.
-    const std::uint32_t next = labels_.next_hint(0);
+    const std::uint32_t next = queue.next_hint(0);
     if (next < n) g_.prefetch(next);
-    const std::uint32_t later = labels_.next_hint(3);
+    const std::uint32_t later = queue.next_hint(3);
     if (later < n) {
       g_.prefetch_position(later);
-      labels_.prefetch_label(later);
+      queue.prefetch_label(later);
     }
     ++settled_;
     const double* p = g_.position(u);
@@ -392,7 +392,7 @@ void GeodesicQuery::run(Queue& labels_, const SurfacePoint& source,
         [&](std::uint32_t v, std::uint32_t via) { relax(v, p, g_.position(v), d, via); },
         [&](std::uint32_t f) { relax_targets(f, p, d); });
   }
-  for (std::size_t j = 0; j < targets.size(); ++j) out[j] = labels_.dist(n + j);
+  for (std::size_t j = 0; j < targets.size(); ++j) out[j] = queue.dist(n + j);
   for (const auto& t : targets) face_target_head_[t.face] = -1;
 }
 
