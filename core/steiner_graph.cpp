@@ -248,10 +248,16 @@ bool LabelHeap::pop(Entry& out) {
   return true;
 }
 
+namespace {
+
+// note: the bucket width keeps a relative margin below the shortest segment, so that rounding
+// cannot put a node relaxed from bucket b back into bucket b.
+double bucket_width(const SteinerGraph& graph) { return graph.min_segment() * (1 - 1e-6); }
+
+}  // namespace
+
 std::size_t BucketQueue::ring_size(const SteinerGraph& graph) {
-  // note: the width keeps a relative margin below the shortest edge, so that rounding cannot
-  // put a node relaxed from bucket b back into bucket b.
-  const double width = graph.min_segment() * (1 - 1e-6);
+  const double width = bucket_width(graph);
   if (!(width > 0)) return 0;
   const double ring = std::floor(graph.max_segment() / width) + 2;
   constexpr double kMaxRing = 1 << 16;  // beyond this the empty buckets cost more than a heap
@@ -259,7 +265,7 @@ std::size_t BucketQueue::ring_size(const SteinerGraph& graph) {
 }
 
 BucketQueue::BucketQueue(const SteinerGraph& graph)
-    : width_(graph.min_segment() * (1 - 1e-6)), ring_(ring_size(graph)) {}
+    : width_(bucket_width(graph)), ring_(ring_size(graph)) {}
 
 void BucketQueue::reset(std::size_t nodes) {
   for (auto& b : ring_) b.clear();
