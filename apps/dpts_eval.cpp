@@ -210,8 +210,11 @@ int run(const Options& o) {
         rmse, vmax, measured, uncovered);
     std::printf("steiner graphs   delta %.4f m: T %zu nodes (%.2f s), T' %zu nodes (%.2f s)\n",
                 r.delta_m, r.original_nodes, r.original_s, r.simplified_nodes, r.simplified_s);
-    std::printf("searched         %.1f %% of T, %.1f %% of T' per query on average\n",
-                100 * r.original_searched, 100 * r.simplified_searched);
+    std::printf(
+        "searched         %.1f %% of T, %.1f %% of T' per query on average (pairs measured one "
+        "way: %zu on T, %zu on T')\n",
+        100 * r.original_searched, 100 * r.simplified_searched, r.original_one_way,
+        r.simplified_one_way);
     for (std::size_t i = 0; i < r.set_errors.size(); ++i) {
       std::printf("distance error   set %zu: %.6f\n", i + 1, r.set_errors[i]);
     }
@@ -239,6 +242,8 @@ int run(const Options& o) {
                      .add("steiner_nodes_mesh", r.simplified_nodes)
                      .add("searched_share_dem", r.original_searched)
                      .add("searched_share_mesh", r.simplified_searched)
+                     .add("one_way_pairs_dem", r.original_one_way)
+                     .add("one_way_pairs_mesh", r.simplified_one_way)
                      .add("snapped_points", r.snapped)
                      .add("faces_not_ccw", mc.clockwise_or_flat)
                      .add("bad_edges", mc.bad_edges)

@@ -319,16 +319,36 @@ void GeodesicQuery::distances(const SurfacePoint& source, const std::vector<Surf
                               std::vector<double>& out) {
   out.assign(targets.size(), std::numeric_limits<double>::infinity());
   if (targets.empty()) return;
+  const double inf = std::numeric_limits<double>::infinity();
   if (buckets_) {
-    run(*buckets_, source, targets, out);
+    run(*buckets_, source, targets, inf, inf, nullptr, out);
   } else {
-    run(heap_, source, targets, out);
+    run(heap_, source, targets, inf, inf, nullptr, out);
+  }
+}
+
+void GeodesicQuery::explore(const SurfacePoint& source, const std::vector<SurfacePoint>& targets,
+                            double radius, double shell_from,
+                            std::vector<std::pair<std::uint32_t, double>>& shell,
+                            std::vector<double>& out) {
+  shell.clear();
+  out.assign(targets.size(), std::numeric_limits<double>::infinity());
+  if (buckets_) {
+    run(*buckets_, source, targets, radius, shell_from, &shell, out);
+  } else {
+    run(heap_, source, targets, radius, shell_from, &shell, out);
+  }
+  const std::size_t n = g_.node_count();
+  for (std::size_t j = 0; j < targets.size(); ++j) {
+    out[j] = settled_distance(static_cast<std::uint32_t>(n + j));
   }
 }
 
 template <typename Queue>
 void GeodesicQuery::run(Queue& queue, const SurfacePoint& source,
-                        const std::vector<SurfacePoint>& targets, std::vector<double>& out) {
+                        const std::vector<SurfacePoint>& targets, double radius, double shell_from,
+                        std::vector<std::pair<std::uint32_t, double>>* shell,
+                        std::vector<double>& out) {
   const double inf = std::numeric_limits<double>::infinity();
   const std::size_t n = g_.node_count();
   // Targets are extra nodes n + j, reached from their face's boundary nodes.
@@ -392,6 +412,8 @@ void GeodesicQuery::run(Queue& queue, const SurfacePoint& source,
       queue.prefetch_label(later);
     }
     ++settled_;
+    if (d > radius) queue.finish();  // this one is settled too: it only ends the search sooner
+    if (shell && d > shell_from) shell->emplace_back(u, d);
     const double* p = g_.position(u);
     g_.for_each_neighbour(
         u, top.tag,

@@ -8,7 +8,9 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace dpts::core {
@@ -167,6 +169,11 @@ class LabelHeap {
   // All nodes at infinity, the heap empty.
   void reset(std::size_t nodes);
   double dist(std::uint32_t node) const { return label_[node].dist; }
+  // The node's distance if it was popped, else infinity.
+  double settled_dist(std::uint32_t node) const {
+    const Label& l = label_[node];
+    return l.slot == 0 ? l.dist : std::numeric_limits<double>::infinity();
+  }
   // Lowers node's distance to key (which must be smaller), inserting it if not in the heap.
   void decrease(std::uint32_t node, double key, std::uint32_t tag);
   // The entry of least key into out (its node keeps its distance); false when none is left.
@@ -205,6 +212,10 @@ class BucketQueue {
   explicit BucketQueue(const SteinerGraph& graph);
   void reset(std::size_t nodes);
   double dist(std::uint32_t node) const { return label_[node].dist; }
+  double settled_dist(std::uint32_t node) const {
+    const Label& l = label_[node];
+    return l.settled ? l.dist : std::numeric_limits<double>::infinity();
+  }
   void decrease(std::uint32_t node, double key, std::uint32_t tag);
   // A node of the lowest bucket with its distance and tag into out, marked settled; false when
   // none is left.
@@ -247,6 +258,19 @@ class GeodesicQuery {
   void distances(const SurfacePoint& source, const std::vector<SurfacePoint>& targets,
                  std::vector<double>& out);
 
+  // A search bounded by a radius: settles every node within `radius` of source (at least;
+  // fewer when all targets are settled first). Into out: each settled target's distance, else
+  // infinity; into shell: the settled graph nodes farther than shell_from, with distances.
+  // The settled distances stay readable (settled_distance) until the next query.
+  void explore(const SurfacePoint& source, const std::vector<SurfacePoint>& targets, double radius,
+               double shell_from, std::vector<std::pair<std::uint32_t, double>>& shell,
+               std::vector<double>& out);
+  // A graph node's distance from the last query's source if that query settled it, else
+  // infinity.
+  double settled_distance(std::uint32_t node) const {
+    return buckets_ ? buckets_->settled_dist(node) : heap_.settled_dist(node);
+  }
+
   // Graph nodes the last query settled (the area it searched).
   std::size_t settled() const { return settled_; }
 
@@ -256,6 +280,7 @@ class GeodesicQuery {
  private:
   template <typename Queue>
   void run(Queue& queue, const SurfacePoint& source, const std::vector<SurfacePoint>& targets,
+           double radius, double shell_from, std::vector<std::pair<std::uint32_t, double>>* shell,
            std::vector<double>& out);
   const SteinerGraph& g_;
   LabelHeap heap_;

@@ -3,26 +3,34 @@
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <limits>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <utility>
 
 #include "core/errors.hpp"
 #include "core/surface_sampling.hpp"
 
 namespace dpts::par {
 
-std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
-                                       const std::vector<core::SurfacePoint>& points,
-                                       double* settled) {
+namespace {
+
+using Shell = std::vector<std::pair<std::uint32_t, double>>;
+
+// Measures the pairs i < j with need[i * K + j] into out[i * K + j]: each pair by a Dijkstra
+// from the endpoint that ranks the other nearer (straight-line distance), so that every query
+// stops at about its nearest half of the points instead of the farthest. Adds the settled
+// nodes to *settled.
+void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::SurfacePoint>& points,
+                     const std::vector<char>& need, std::vector<double>& out, double* settled) {
   const std::size_t k = points.size();
-  std::vector<double> out(k * k, 0.0);
-  // Each pair is measured once, by a Dijkstra from the endpoint that ranks the other nearer
-  // (straight-line distance): every query then stops at about its nearest half of the points
-  // instead of the farthest, which roughly halves the area searched.
   auto d2 = [&](std::size_t i, std::size_t j) {
     const double dx = points[i].x - points[j].x, dy = points[i].y - points[j].y,
                  dz = points[i].z - points[j].z;
@@ -43,6 +51,7 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
   std::vector<std::vector<std::size_t>> assigned(k);
   for (std::size_t i = 0; i < k; ++i) {
     for (std::size_t j = i + 1; j < k; ++j) {
+      if (!need[i * k + j]) continue;
       if (rank[i][j] <= rank[j][i]) {
         assigned[i].push_back(j);
       } else {
@@ -74,6 +83,202 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
   if (settled) {
     for (std::size_t n : settled_by) *settled += static_cast<double>(n);
   }
+}
+
+// Search radii for meeting in the middle: R_i + R_j >= c_ij for every pair, with the sum of
+// squared radii (about the area searched) made small by coordinate descent. Deterministic.
+std::vector<double> meeting_radii(const std::vector<double>& c, std::size_t k) {
+  std::vector<double> r(k, 0.0);
+  for (std::size_t i = 0; i < k; ++i) {
+    for (std::size_t j = 0; j < k; ++j) {
+      if (j != i) r[i] = std::max(r[i], c[i * k + j] / 2);
+    }
+  }
+  for (int round = 0; round < 50; ++round) {
+    for (std::size_t i = 0; i < k; ++i) {
+      double need = 0.0;
+      for (std::size_t j = 0; j < k; ++j) {
+        if (j != i) need = std::max(need, c[i * k + j] - r[j]);
+      }
+      r[i] = need;
+    }
+  }
+  return r;
+}
+
+}  // namespace
+
+std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
+                                       const std::vector<core::SurfacePoint>& points,
+                                       double* settled, PairwiseMethod method,
+                                       std::size_t* one_way_pairs) {
+  const std::size_t k = points.size();
+  std::vector<double> out(k * k, 0.0);
+  std::vector<char> need(k * k, 0);
+  for (std::size_t i = 0; i < k; ++i) {
+    for (std::size_t j = i + 1; j < k; ++j) need[i * k + j] = 1;
+  }
+  if (method == PairwiseMethod::kOneWay || k < 3) {
+    measure_one_way(graph, points, need, out, settled);
+    if (one_way_pairs) *one_way_pairs += k * (k - 1) / 2;
+    return out;
+  }
+  const double inf = std::numeric_limits<double>::infinity();
+  auto straight = [&](std::size_t i, std::size_t j) {
+    const double dx = points[i].x - points[j].x, dy = points[i].y - points[j].y,
+                 dz = points[i].z - points[j].z;
+    return std::sqrt(dx * dx + dy * dy + dz * dz);
+  };
+  auto others = [&](std::size_t i) {
+    std::vector<core::SurfacePoint> t;
+    for (std::size_t j = 0; j < k; ++j) {
+      if (j != i) t.push_back(points[j]);
+    }
+    return t;
+  };
+  // direct[i * k + j]: GD(i, j) as settled by the search from i (infinity if it was not).
+  std::vector<double> direct(k * k, inf);
+  std::vector<std::size_t> settled_by(k, 0);
+  // Point 0 is searched in full: its distances give the estimates the radii need, the ratio of
+  // geodesic to straight-line distance over its farther half of the pairs.
+  double ratio = 1.0;
+  {
+    core::GeodesicQuery q(graph);
+    std::vector<double> d;
+    q.distances(points[0], others(0), d);
+    settled_by[0] = q.settled();
+    std::vector<std::pair<double, double>> far;  // (straight, geodesic)
+    for (std::size_t j = 1; j < k; ++j) {
+      direct[j] = d[j - 1];
+      far.emplace_back(straight(0, j), d[j - 1]);
+    }
+    std::sort(far.begin(), far.end());
+    for (std::size_t t = far.size() / 2; t < far.size(); ++t) {
+      if (far[t].first > 0 && std::isfinite(far[t].second)) {
+        ratio = std::max(ratio, far[t].second / far[t].first);
+      }
+    }
+  }
+  // note: a pair joins where the searches overlap by the longest segment at least (the last
+  // node of a shortest path inside one search is then settled by the other too).
+  const double w = graph.max_segment();
+  std::vector<double> c(k * k, 0.0);
+  for (std::size_t i = 1; i < k; ++i) {
+    for (std::size_t j = 1; j < k; ++j) {
+      if (j != i) c[i * k + j] = 1.05 * ratio * straight(i, j) + w;
+    }
+  }
+  const std::vector<double> radius = meeting_radii(c, k);  // radius[0]: unused
+
+  // Sources 1..K-1 are searched to their radii in order, by as many workers as threads. A pair
+  // a < b is joined over a's shell (its settled nodes within w of its radius) with b's settled
+  // distances, so b's query is kept until every source before it has its shell; at most
+  // `max_kept` queries wait so, bounding memory.
+  std::vector<Shell> shells(k);
+  std::vector<double> meet(k * k, inf);
+  std::vector<char> done(k, 0);
+  std::vector<std::size_t> waiting_for(k, 0);
+  std::vector<std::unique_ptr<core::GeodesicQuery>> kept(k);
+  std::vector<std::unique_ptr<core::GeodesicQuery>> pool;
+  std::mutex m;
+  std::condition_variable cv;
+  std::size_t kept_count = 0;
+  const auto workers = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
+  const std::size_t max_kept = 2 * workers;
+  std::size_t next = 1;  // the next source to search (under m)
+  auto join = [&](std::size_t a, std::size_t b, const core::GeodesicQuery& qb) {
+    double best = inf;
+    for (const auto& [v, da] : shells[a]) {
+      const double db = qb.settled_distance(v);
+      if (db < inf) best = std::min(best, da + db);
+    }
+    meet[a * k + b] = best;
+  };
+  tbb::parallel_for(std::size_t{0}, workers, [&](std::size_t) {
+    std::vector<double> d;
+    for (;;) {
+      // note: the query first, then the source: a worker waiting for a query holds no source,
+      // so every source a kept query waits for is being searched (no deadlock).
+      std::unique_ptr<core::GeodesicQuery> q;
+      std::size_t i = 0;
+      {
+        std::unique_lock<std::mutex> lock(m);
+        cv.wait(lock, [&] { return kept_count < max_kept || next >= k; });
+        i = next++;
+        if (i >= k) return;
+        if (!pool.empty()) {
+          q = std::move(pool.back());
+          pool.pop_back();
+        }
+      }
+      if (!q) q = std::make_unique<core::GeodesicQuery>(graph);
+      const auto targets = others(i);
+      q->explore(points[i], targets, radius[i], radius[i] - w, shells[i], d);
+      settled_by[i] = q->settled();
+      for (std::size_t j = 0, t = 0; j < k; ++j) {
+        if (j != i) direct[i * k + j] = d[t++];
+      }
+      // Pairs to join now: (a, i) for the sources a before i with shells, and (i, b) for the
+      // kept queries b after i. i's query is kept until its own joins are done and every
+      // source before i has joined with it (waiting_for counts both).
+      std::vector<std::size_t> before, after;
+      const core::GeodesicQuery* qi = q.get();
+      {
+        std::lock_guard<std::mutex> lock(m);
+        done[i] = 1;
+        waiting_for[i] = 1;
+        for (std::size_t a = 1; a < i; ++a) {
+          if (done[a]) {
+            before.push_back(a);
+          } else {
+            ++waiting_for[i];  // a is being searched: it joins with i when done
+          }
+        }
+        for (std::size_t b = i + 1; b < k; ++b) {
+          if (kept[b]) after.push_back(b);
+        }
+        kept[i] = std::move(q);
+        ++kept_count;
+      }
+      for (std::size_t a : before) join(a, i, *qi);
+      for (std::size_t b : after) join(i, b, *kept[b]);
+      {
+        std::lock_guard<std::mutex> lock(m);
+        after.push_back(i);
+        for (std::size_t b : after) {
+          if (--waiting_for[b] == 0) {
+            pool.push_back(std::move(kept[b]));
+            --kept_count;
+          }
+        }
+      }
+      cv.notify_all();
+    }
+  });
+  // note: every value below comes from searches and joins whose results do not depend on the
+  // thread count, chosen by a fixed rule, so the figures are the same for any --threads.
+  std::vector<char> left(k * k, 0);
+  std::size_t left_count = 0;
+  for (std::size_t a = 0; a < k; ++a) {
+    for (std::size_t b = a + 1; b < k; ++b) {
+      double v = direct[a * k + b];
+      if (!(v < inf)) v = direct[b * k + a];
+      if (!(v < inf) && a > 0 && meet[a * k + b] <= radius[a] + radius[b] - w) {
+        v = meet[a * k + b];
+      }
+      if (v < inf) {
+        out[a * k + b] = v;
+      } else {
+        left[a * k + b] = 1;
+        ++left_count;
+      }
+    }
+  }
+  if (settled) {
+    for (std::size_t n : settled_by) *settled += static_cast<double>(n);
+  }
+  if (left_count > 0) measure_one_way(graph, points, left, out, settled);
+  if (one_way_pairs) *one_way_pairs += left_count;
   return out;
 }
 
@@ -118,10 +323,12 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
         "set " + std::to_string(set + 1) + "/" + std::to_string(options.sets);
     stage(set_name + ": geodesics on T");
     auto t0 = std::chrono::steady_clock::now();
-    const std::vector<double> dt = pairwise_distances(graph_t, on_t, &settled_t);
+    const std::vector<double> dt =
+        pairwise_distances(graph_t, on_t, &settled_t, options.method, &result.original_one_way);
     auto t1 = std::chrono::steady_clock::now();
     stage(set_name + ": geodesics on T'");
-    const std::vector<double> ds = pairwise_distances(graph_s, on_s, &settled_s);
+    const std::vector<double> ds =
+        pairwise_distances(graph_s, on_s, &settled_s, options.method, &result.simplified_one_way);
     auto t2 = std::chrono::steady_clock::now();
     result.original_s += std::chrono::duration<double>(t1 - t0).count();
     result.simplified_s += std::chrono::duration<double>(t2 - t1).count();

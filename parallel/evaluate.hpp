@@ -11,13 +11,28 @@
 
 namespace dpts::par {
 
+// How pairwise_distances measures the pairs.
+enum class PairwiseMethod {
+  // Each pair by one Dijkstra from the endpoint that ranks the other nearer, stopping when its
+  // targets are settled (each query searches about three quarters of the graph).
+  kOneWay,
+  // Meeting in the middle: every source searched once, to a radius fitted so that for each
+  // pair the two radii overlap (estimated from one full search); a pair is the least sum of
+  // both searches' distances over the outer shell of one of them. Pairs the radii turn out too
+  // short for are measured one way. About a third of the graph per query.
+  kMeet,
+};
+
 // Geodesic distances between all pairs of points on the graph's mesh: out[i * K + j] for
-// i < j (the rest 0). One sequential Dijkstra per source i (to the targets j > i), sources
-// spread over oneTBB tasks, scratch per thread: the figures are the same for any thread count.
-// If `settled` is given, the graph nodes settled by all the queries are added to it.
+// i < j (the rest 0). Sequential Dijkstra queries spread over oneTBB tasks, scratch per
+// thread: the figures are the same for any thread count. If `settled` is given, the graph
+// nodes settled by all the queries are added to it; if `one_way_pairs` is, the pairs that were
+// measured one way.
 std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
                                        const std::vector<core::SurfacePoint>& points,
-                                       double* settled = nullptr);
+                                       double* settled = nullptr,
+                                       PairwiseMethod method = PairwiseMethod::kMeet,
+                                       std::size_t* one_way_pairs = nullptr);
 
 struct EvalOptions {
   int points = 100;  // K points per set
@@ -25,6 +40,7 @@ struct EvalOptions {
   std::uint64_t seed = 1;
   double delta_m = 0;  // Steiner spacing; 0: kDefaultDeltaFactor x mean edge of T
   double snap_m = 0;   // points outside T' within this distance are snapped onto it
+  PairwiseMethod method = PairwiseMethod::kMeet;
 };
 
 // Default Steiner spacing as a fraction of the mean 3D edge length of the original TIN.
@@ -39,6 +55,8 @@ struct EvalResult {
   double original_s = 0, simplified_s = 0;  // wall time of the geodesics on T and on T'
   // Mean share of the graph one Dijkstra query settled, on T and on T'.
   double original_searched = 0, simplified_searched = 0;
+  // Pairs measured one way (all of them with kOneWay; with kMeet those the radii missed).
+  std::size_t original_one_way = 0, simplified_one_way = 0;
 };
 
 // Samples K points uniformly in T's footprint per set (seeded by seed and set), lifts them onto

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "core/errors.hpp"
+#include "core/steiner_graph.hpp"
 #include "core/surface_sampling.hpp"
 #include "parallel/simplify.hpp"
 #include "test_support.hpp"
@@ -106,4 +107,31 @@ TEST_CASE("sample points outside the mesh are an error with their count", "[para
   CHECK_THROWS_WITH(
       par::evaluate_distances(t, half, opt),
       Catch::Matches(".*[0-9]+ of 40 sample points of set 1 lie outside the mesh's footprint"));
+}
+
+TEST_CASE("meeting in the middle gives the distances of one-way queries",
+          "[parallel][evaluate][geodesic]") {
+  // Hills with a no-data hole (paths bend around it), on the grid TIN and on a 20 % TIN.
+  const auto g = hills();
+  for (const auto& mesh : {hills_grid_mesh(g), simplified(g, 20.0)}) {
+    const core::SteinerGraph graph(mesh, 0.25 * core::mean_edge_length(hills_grid_mesh(g)));
+    const auto points = core::sample_uniform(mesh, 40, 5);
+    std::size_t one_way = 0;
+    double settled_meet = 0, settled_one_way = 0;
+    const auto meet =
+        par::pairwise_distances(graph, points, &settled_meet, par::PairwiseMethod::kMeet, &one_way);
+    const auto ref =
+        par::pairwise_distances(graph, points, &settled_one_way, par::PairwiseMethod::kOneWay);
+    const std::size_t k = points.size();
+    for (std::size_t i = 0; i < k; ++i) {
+      for (std::size_t j = i + 1; j < k; ++j) {
+        CAPTURE(i, j);
+        REQUIRE(std::isfinite(ref[i * k + j]));
+        CHECK(meet[i * k + j] == Approx(ref[i * k + j]).epsilon(1e-12));
+      }
+    }
+    // The searches met for most pairs, and searched less of the graph in all.
+    CHECK(one_way < k * (k - 1) / 4);
+    CHECK(settled_meet < settled_one_way);
+  }
 }
