@@ -139,38 +139,45 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
   // direct[i * k + j]: GD(i, j) as settled by the search from i (infinity if it was not).
   std::vector<double> direct(k * k, inf);
   std::vector<std::size_t> settled_by(k, 0);
-  // Point 0 is searched in full: its distances give the estimates the radii need, the ratio of
-  // geodesic to straight-line distance over its farther half of the pairs.
-  double ratio = 1.0;
-  {
+  // The first kPilots points are searched in full (in parallel): their distances give the
+  // estimates the radii need, the largest ratio of geodesic to straight-line distance over the
+  // farther half of each one's pairs. note: a fixed count, not one per thread: the radii, and so
+  // the figures, must not depend on the thread count.
+  constexpr std::size_t kPilots = 2;
+  const std::size_t pilots = std::min(kPilots, k);
+  std::vector<double> pilot_ratio(pilots, 1.0);
+  tbb::parallel_for(std::size_t{0}, pilots, [&](std::size_t p) {
     core::GeodesicQuery q(graph);
     std::vector<double> d;
-    q.distances(points[0], others(0), d);
-    settled_by[0] = q.settled();
+    q.distances(points[p], others(p), d);
+    settled_by[p] = q.settled();
     std::vector<std::pair<double, double>> far;  // (straight, geodesic)
-    for (std::size_t j = 1; j < k; ++j) {
-      direct[j] = d[j - 1];
-      far.emplace_back(straight(0, j), d[j - 1]);
+    for (std::size_t j = 0, t = 0; j < k; ++j) {
+      if (j == p) continue;
+      direct[p * k + j] = d[t];
+      far.emplace_back(straight(p, j), d[t]);
+      ++t;
     }
     std::sort(far.begin(), far.end());
     for (std::size_t t = far.size() / 2; t < far.size(); ++t) {
       if (far[t].first > 0 && std::isfinite(far[t].second)) {
-        ratio = std::max(ratio, far[t].second / far[t].first);
+        pilot_ratio[p] = std::max(pilot_ratio[p], far[t].second / far[t].first);
       }
     }
-  }
+  });
+  const double ratio = *std::max_element(pilot_ratio.begin(), pilot_ratio.end());
   // note: a pair joins where the searches overlap by the longest segment at least (the last
   // node of a shortest path inside one search is then settled by the other too).
   const double w = graph.max_segment();
   std::vector<double> c(k * k, 0.0);
-  for (std::size_t i = 1; i < k; ++i) {
-    for (std::size_t j = 1; j < k; ++j) {
+  for (std::size_t i = pilots; i < k; ++i) {
+    for (std::size_t j = pilots; j < k; ++j) {
       if (j != i) c[i * k + j] = 1.05 * ratio * straight(i, j) + w;
     }
   }
-  const std::vector<double> radius = meeting_radii(c, k);  // radius[0]: unused
+  const std::vector<double> radius = meeting_radii(c, k);  // pilots' radii: unused
 
-  // Sources 1..K-1 are searched to their radii in order, by as many workers as threads. A pair
+  // The other sources are searched to their radii in order, by as many workers as threads. A pair
   // a < b is joined over a's shell (its settled nodes within w of its radius) with b's settled
   // distances, so b's query is kept until every source before it has its shell; at most
   // `max_kept` queries wait so, bounding memory.
@@ -185,7 +192,7 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
   std::size_t kept_count = 0;
   const auto workers = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
   const std::size_t max_kept = 2 * workers;
-  std::size_t next = 1;  // the next source to search (under m)
+  std::size_t next = pilots;  // the next source to search (under m)
   auto join = [&](std::size_t a, std::size_t b, const core::GeodesicQuery& qb) {
     double best = inf;
     for (const auto& [v, da] : shells[a]) {
@@ -227,7 +234,7 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
         std::lock_guard<std::mutex> lock(m);
         done[i] = 1;
         waiting_for[i] = 1;
-        for (std::size_t a = 1; a < i; ++a) {
+        for (std::size_t a = pilots; a < i; ++a) {
           if (done[a]) {
             before.push_back(a);
           } else {
@@ -263,7 +270,7 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
     for (std::size_t b = a + 1; b < k; ++b) {
       double v = direct[a * k + b];
       if (!(v < inf)) v = direct[b * k + a];
-      if (!(v < inf) && a > 0 && meet[a * k + b] <= radius[a] + radius[b] - w) {
+      if (!(v < inf) && a >= pilots && meet[a * k + b] <= radius[a] + radius[b] - w) {
         v = meet[a * k + b];
       }
       if (v < inf) {

@@ -17,7 +17,7 @@ enum class PairwiseMethod {
   // targets are settled (each query searches about three quarters of the graph).
   kOneWay,
   // Meeting in the middle: every source searched once, to a radius fitted so that for each
-  // pair the two radii overlap (estimated from one full search); a pair is the least sum of
+  // pair the two radii overlap (estimated from two full searches); a pair is the least sum of
   // both searches' distances over the outer shell of one of them. Pairs the radii turn out too
   // short for are measured one way. About a third of the graph per query.
   kMeet,
