@@ -201,7 +201,8 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
     }
     meet[a * k + b] = best;
   };
-  tbb::parallel_for(std::size_t{0}, workers, [&](std::size_t) {
+  bool failed = false;  // a worker threw (out of memory): the others stop instead of waiting
+  auto work = [&] {
     std::vector<double> d;
     for (;;) {
       // note: the query first, then the source: a worker waiting for a query holds no source,
@@ -210,7 +211,8 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
       std::size_t i = 0;
       {
         std::unique_lock<std::mutex> lock(m);
-        cv.wait(lock, [&] { return kept_count < max_kept || next >= k; });
+        cv.wait(lock, [&] { return kept_count < max_kept || next >= k || failed; });
+        if (failed) return;
         i = next++;
         if (i >= k) return;
         if (!pool.empty()) {
@@ -260,6 +262,18 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
         }
       }
       cv.notify_all();
+    }
+  };
+  tbb::parallel_for(std::size_t{0}, workers, [&](std::size_t) {
+    try {
+      work();
+    } catch (...) {
+      {
+        std::lock_guard<std::mutex> lock(m);
+        failed = true;
+      }
+      cv.notify_all();
+      throw;
     }
   });
   // note: every value below comes from searches and joins whose results do not depend on the
