@@ -320,11 +320,7 @@ void GeodesicQuery::distances(const SurfacePoint& source, const std::vector<Surf
   out.assign(targets.size(), std::numeric_limits<double>::infinity());
   if (targets.empty()) return;
   const double inf = std::numeric_limits<double>::infinity();
-  if (buckets_) {
-    run(*buckets_, source, targets, inf, inf, nullptr, out);
-  } else {
-    run(heap_, source, targets, inf, inf, nullptr, out);
-  }
+  search(source, targets, inf, inf, nullptr, out);
 }
 
 void GeodesicQuery::explore(const SurfacePoint& source, const std::vector<SurfacePoint>& targets,
@@ -333,14 +329,17 @@ void GeodesicQuery::explore(const SurfacePoint& source, const std::vector<Surfac
                             std::vector<double>& out) {
   shell.clear();
   out.assign(targets.size(), std::numeric_limits<double>::infinity());
+  search(source, targets, radius, shell_from, &shell, out);
+}
+
+void GeodesicQuery::search(const SurfacePoint& source, const std::vector<SurfacePoint>& targets,
+                           double radius, double shell_from,
+                           std::vector<std::pair<std::uint32_t, double>>* shell,
+                           std::vector<double>& out) {
   if (buckets_) {
-    run(*buckets_, source, targets, radius, shell_from, &shell, out);
+    run(*buckets_, source, targets, radius, shell_from, shell, out);
   } else {
-    run(heap_, source, targets, radius, shell_from, &shell, out);
-  }
-  const std::size_t n = g_.node_count();
-  for (std::size_t j = 0; j < targets.size(); ++j) {
-    out[j] = settled_distance(static_cast<std::uint32_t>(n + j));
+    run(heap_, source, targets, radius, shell_from, shell, out);
   }
 }
 
@@ -420,7 +419,8 @@ void GeodesicQuery::run(Queue& queue, const SurfacePoint& source,
         [&](std::uint32_t v, std::uint32_t via) { relax(v, p, g_.position(v), d, via); },
         [&](std::uint32_t f) { relax_targets(f, p, d); });
   }
-  for (std::size_t j = 0; j < targets.size(); ++j) out[j] = queue.dist(n + j);
+  // note: a target not settled (search bounded by a radius, or unreachable) stays at infinity.
+  for (std::size_t j = 0; j < targets.size(); ++j) out[j] = queue.settled_dist(n + j);
   for (const auto& t : targets) face_target_head_[t.face] = -1;
 }
 

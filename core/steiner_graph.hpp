@@ -278,6 +278,10 @@ class GeodesicQuery {
   bool uses_buckets() const { return buckets_ != nullptr; }
 
  private:
+  // explore(), or distances() with an infinite radius and no shell, on the graph's queue.
+  void search(const SurfacePoint& source, const std::vector<SurfacePoint>& targets, double radius,
+              double shell_from, std::vector<std::pair<std::uint32_t, double>>* shell,
+              std::vector<double>& out);
   template <typename Queue>
   void run(Queue& queue, const SurfacePoint& source, const std::vector<SurfacePoint>& targets,
            double radius, double shell_from, std::vector<std::pair<std::uint32_t, double>>* shell,

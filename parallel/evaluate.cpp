@@ -24,6 +24,13 @@ namespace {
 
 using Shell = std::vector<std::pair<std::uint32_t, double>>;
 
+// Squared straight-line (3D) distance between points i and j.
+double straight2(const std::vector<core::SurfacePoint>& points, std::size_t i, std::size_t j) {
+  const double dx = points[i].x - points[j].x, dy = points[i].y - points[j].y,
+               dz = points[i].z - points[j].z;
+  return dx * dx + dy * dy + dz * dz;
+}
+
 // Measures the pairs i < j with need[i * K + j] into out[i * K + j]: each pair by a Dijkstra
 // from the endpoint that ranks the other nearer (straight-line distance), so that every query
 // stops at about its nearest half of the points instead of the farthest. Adds the settled
@@ -31,11 +38,7 @@ using Shell = std::vector<std::pair<std::uint32_t, double>>;
 void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::SurfacePoint>& points,
                      const std::vector<char>& need, std::vector<double>& out, double* settled) {
   const std::size_t k = points.size();
-  auto d2 = [&](std::size_t i, std::size_t j) {
-    const double dx = points[i].x - points[j].x, dy = points[i].y - points[j].y,
-                 dz = points[i].z - points[j].z;
-    return dx * dx + dy * dy + dz * dz;
-  };
+  auto d2 = [&](std::size_t i, std::size_t j) { return straight2(points, i, j); };
   std::vector<std::vector<std::size_t>> rank(k, std::vector<std::size_t>(k, 0));
   for (std::size_t i = 0; i < k; ++i) {
     std::vector<std::size_t> order;
@@ -124,11 +127,7 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
     return out;
   }
   const double inf = std::numeric_limits<double>::infinity();
-  auto straight = [&](std::size_t i, std::size_t j) {
-    const double dx = points[i].x - points[j].x, dy = points[i].y - points[j].y,
-                 dz = points[i].z - points[j].z;
-    return std::sqrt(dx * dx + dy * dy + dz * dz);
-  };
+  auto straight = [&](std::size_t i, std::size_t j) { return std::sqrt(straight2(points, i, j)); };
   auto others = [&](std::size_t i) {
     std::vector<core::SurfacePoint> t;
     for (std::size_t j = 0; j < k; ++j) {
