@@ -261,35 +261,31 @@ std::size_t BucketQueue::ring_size(const SteinerGraph& graph) {
   if (!(width > 0)) return 0;
   const double ring = std::floor(graph.max_segment() / width) + 2;
   constexpr double kMaxRing = 1 << 16;  // beyond this the empty buckets cost more than a heap
-  return ring <= kMaxRing ? static_cast<std::size_t>(ring) : 0;
+  if (!(ring <= kMaxRing)) return 0;
+  // note: a power of two, so that a bucket's slot is a mask, not a division.
+  std::size_t size = 1;
+  while (static_cast<double>(size) < ring) size *= 2;
+  return size;
 }
 
 BucketQueue::BucketQueue(const SteinerGraph& graph)
-    : width_(bucket_width(graph)), ring_(ring_size(graph)) {}
+    : width_(bucket_width(graph)),
+      per_width_(1 / width_),
+      ring_(ring_size(graph)),
+      mask_(ring_.size() - 1) {}
 
 void BucketQueue::reset(std::size_t nodes) {
   for (auto& b : ring_) b.clear();
-  label_.assign(nodes, {std::numeric_limits<double>::infinity(), 0, 0});
+  label_.assign(nodes, {std::numeric_limits<double>::infinity(), 0});
   bucket_ = 0;
   next_ = 0;
   queued_ = 0;
   finished_ = false;
 }
 
-void BucketQueue::decrease(std::uint32_t node, double key, std::uint32_t tag) {
-  label_[node].dist = key;
-  label_[node].tag = tag;
-  // note: b >= bucket_ (a distance never falls below the bucket being emptied: its nodes are
-  // at least one width from the others) but for rounding, which the max guards against; and
-  // b < bucket_ + ring size (no edge is longer than max_segment()).
-  const auto b = static_cast<std::uint64_t>(key / width_);
-  ring_[std::max(b, bucket_) % ring_.size()].push_back(node);
-  ++queued_;
-}
-
 bool BucketQueue::pop(Entry& out) {
   while (queued_ > 0) {
-    auto& bucket = ring_[bucket_ % ring_.size()];
+    auto& bucket = ring_[bucket_ & mask_];
     if (next_ == bucket.size()) {
       if (finished_) return false;
       bucket.clear();
@@ -300,9 +296,9 @@ bool BucketQueue::pop(Entry& out) {
     const std::uint32_t node = bucket[next_++];
     --queued_;
     Label& l = label_[node];
-    if (l.settled) continue;  // lowered since, and settled from an earlier bucket
-    l.settled = 1;
+    if (std::signbit(l.dist)) continue;  // lowered since, and settled from an earlier bucket
     out = {l.dist, node, l.tag};
+    l.dist = -l.dist;
     return true;
   }
   return false;
@@ -352,6 +348,7 @@ void GeodesicQuery::run(Queue& queue, const SurfacePoint& source,
   const std::size_t n = g_.node_count();
   // Targets are extra nodes n + j, reached from their face's boundary nodes.
   target_next_.assign(targets.size(), -1);
+  target_done_.assign(targets.size(), 0);
   target_faces_.assign((g_.mesh().faces.size() + 63) / 64, 0);
   for (std::size_t j = 0; j < targets.size(); ++j) {
     target_faces_[targets[j].face >> 6] |= std::uint64_t{1} << (targets[j].face & 63);
@@ -396,7 +393,13 @@ void GeodesicQuery::run(Queue& queue, const SurfacePoint& source,
     const double d = top.key;
     const std::uint32_t u = top.node;
     if (u >= n) {
-      if (--remaining == 0) queue.finish();
+      // note: a target's last segment may be shorter than the bucket width, so another node of
+      // this bucket may still lower it: it stays open for that, counted once.
+      queue.reopen(u);
+      if (!target_done_[u - n]) {
+        target_done_[u - n] = 1;
+        if (--remaining == 0) queue.finish();
+      }
       continue;
     }
     // The next node to settle, most likely: its records load while this one relaxes.
@@ -420,7 +423,9 @@ void GeodesicQuery::run(Queue& queue, const SurfacePoint& source,
         [&](std::uint32_t f) { relax_targets(f, p, d); });
   }
   // note: a target not settled (search bounded by a radius, or unreachable) stays at infinity.
-  for (std::size_t j = 0; j < targets.size(); ++j) out[j] = queue.settled_dist(n + j);
+  for (std::size_t j = 0; j < targets.size(); ++j) {
+    if (target_done_[j]) out[j] = std::fabs(queue.dist(static_cast<std::uint32_t>(n + j)));
+  }
   for (const auto& t : targets) face_target_head_[t.face] = -1;
 }
 

@@ -5,7 +5,9 @@
 // Dijkstra reaches it, so memory is linear in the number of Steiner points.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -183,6 +185,8 @@ class LabelHeap {
     return ahead == 0 && !heap_.empty() ? heap_.front().node : kNone;
   }
   void prefetch_label(std::uint32_t) const {}
+  // A popped node may be lowered again (a target: see BucketQueue::reopen); here none can be.
+  void reopen(std::uint32_t) {}
   // Ends the search: pop answers false from now on (every popped distance is final).
   void finish() { finished_ = true; }
   static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
@@ -211,32 +215,53 @@ class BucketQueue {
   static std::size_t ring_size(const SteinerGraph& graph);
   explicit BucketQueue(const SteinerGraph& graph);
   void reset(std::size_t nodes);
+  // The node's tentative distance; below zero once settled, so no relaxation improves it.
   double dist(std::uint32_t node) const { return label_[node].dist; }
   double settled_dist(std::uint32_t node) const {
-    const Label& l = label_[node];
-    return l.settled ? l.dist : std::numeric_limits<double>::infinity();
+    const double l = label_[node].dist;
+    return std::signbit(l) ? -l : std::numeric_limits<double>::infinity();
   }
-  void decrease(std::uint32_t node, double key, std::uint32_t tag);
+  void decrease(std::uint32_t node, double key, std::uint32_t tag) {
+    Label& l = label_[node];
+    // note: b >= bucket_ (a distance never falls below the bucket being emptied: its nodes are
+    // at least one width from the others) but for rounding, which the max guards against; and
+    // b < bucket_ + ring size (no edge is longer than max_segment()). The width's margin covers
+    // the rounding of multiplying by its inverse.
+    const std::uint64_t b = std::max(static_cast<std::uint64_t>(key * per_width_), bucket_);
+    // A node lowered within its bucket is there already.
+    const bool queued = l.dist < std::numeric_limits<double>::infinity() &&
+                        std::max(static_cast<std::uint64_t>(l.dist * per_width_), bucket_) == b;
+    l.dist = key;
+    l.tag = tag;
+    if (queued) return;
+    ring_[b & mask_].push_back(node);
+    ++queued_;
+  }
   // A node of the lowest bucket with its distance and tag into out, marked settled; false when
   // none is left.
   bool pop(Entry& out);
   std::uint32_t next_hint(std::size_t ahead) const {
-    const auto& b = ring_[bucket_ % ring_.size()];
+    const auto& b = ring_[bucket_ & mask_];
     return next_ + ahead < b.size() ? b[next_ + ahead] : LabelHeap::kNone;
   }
   void prefetch_label(std::uint32_t node) const { __builtin_prefetch(&label_[node]); }
+  // Lets a popped node be lowered again: a target, whose last segment may be shorter than the
+  // width, by a later node of the same bucket.
+  void reopen(std::uint32_t node) { label_[node].dist = std::fabs(label_[node].dist); }
   // Ends the search once the current bucket is emptied: a distance popped from it is final
   // only then (a target's last segment may be shorter than the width).
   void finish() { finished_ = true; }
 
  private:
+  // note: a settled node's distance is negated. A node is in one bucket at most once: lowered
+  // into an earlier bucket it is queued there too and its old entry skipped later (settled).
   struct Label {
     double dist;
     std::uint32_t tag;
-    std::uint32_t settled;
   };
-  double width_;
+  double width_, per_width_;
   std::vector<std::vector<std::uint32_t>> ring_;
+  std::uint64_t mask_;  // ring size - 1
   std::vector<Label> label_;
   std::uint64_t bucket_ = 0;  // the bucket being emptied
   std::size_t next_ = 0;      // its next entry
@@ -292,6 +317,7 @@ class GeodesicQuery {
   std::vector<std::int32_t> face_target_head_;  // first target in a face, -1: none
   std::vector<std::uint64_t> target_faces_;     // bit per face: has a target (fits in cache)
   std::vector<std::int32_t> target_next_;
+  std::vector<char> target_done_;  // target settled (its distance final once the search ends)
   std::vector<std::uint32_t> nodes_;
   std::size_t settled_ = 0;
 };
