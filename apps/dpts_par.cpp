@@ -159,7 +159,7 @@ int run_qslim(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printe
   // In the frame (u, w; heights in frame units): collinear cells stay exactly collinear there,
   // so the fold test sees flat slivers along the outline of a reprojected DEM as flat.
   const core::GridTin tin = core::grid_tin(dem.grid, core::delaunay_diagonal(dem.frame));
-  if (tin.faces.empty()) throw InputError(o.input + ": no three neighbouring valid cells");
+  if (tin.faces.empty()) throw InputError(o.input + ": " + kNothingToTriangulate);
   const double unit = dem.frame.metres_per_unit;
   core::TriMesh grid;
   for (std::uint32_t cell : tin.cells) {

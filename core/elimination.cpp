@@ -315,7 +315,7 @@ Eliminator::Eliminator(const HeightGrid& grid, const GridFrame& frame,
   Impl& m = *impl_;
   m.cells = surface_cells(grid);
   if (m.cells.size() < 3) {
-    throw std::invalid_argument("no three neighbouring valid cells: nothing to triangulate");
+    throw std::invalid_argument(kNothingToTriangulate);
   }
   std::vector<std::pair<Point, VertexInfo>> points;
   points.reserve(m.cells.size());

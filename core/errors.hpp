@@ -21,6 +21,11 @@ struct UsageError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// What a DEM with no triangle of valid cells gets, after its file name (every reader and
+// algorithm finds this out on its own, at a different step).
+inline constexpr char kNothingToTriangulate[] =
+    "no three neighbouring valid cells: nothing to triangulate";
+
 // The run was stopped on request (SIGINT, SIGTERM or a progress callback).
 struct Cancelled : std::runtime_error {
   Cancelled() : std::runtime_error("interrupted") {}

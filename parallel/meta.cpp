@@ -371,7 +371,7 @@ MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
   std::size_t total = 0;
   for (const auto& p : pieces) total += p.vertices;
   if (total < 3) {
-    throw InputError(dem.path + ": no three neighbouring valid cells: nothing to triangulate");
+    throw InputError(dem.path + ": " + kNothingToTriangulate);
   }
   st.input_vertices = total;
   st.target_vertices = target_count(options.keep, total);
