@@ -115,6 +115,46 @@ TEST_CASE("the pruned Dijkstra gives the distances of the full Steiner graph", "
   }
 }
 
+TEST_CASE("targets beside graph nodes get their full-graph distance from the buckets",
+          "[core][geodesic]") {
+  // A target's last segment can be far shorter than a bucket is wide: a node settled after the
+  // target in the same bucket may still lower it. Targets 1 cm from a face's boundary nodes,
+  // towards its centroid (so on the face), many to a face.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> height(0.0, 40.0);
+  const auto m = grid_mesh(12, 10, 10.0, [&](int, int) { return height(rng); });
+  const core::SteinerGraph g(m, 3.0);
+  core::GeodesicQuery q(g);
+  REQUIRE(q.uses_buckets());
+  std::vector<core::SurfacePoint> targets;
+  std::vector<std::uint32_t> nodes;
+  for (std::uint32_t f = 0; f < m.faces.size(); f += 7) {
+    double c[3] = {0, 0, 0};
+    for (auto v : m.faces[f]) {
+      for (int k = 0; k < 3; ++k) c[k] += m.xyz[3 * v + k] / 3;
+    }
+    g.face_nodes(f, nodes);
+    for (auto v : nodes) {
+      const double* p = g.position(v);
+      const double t = 0.01 / std::sqrt((c[0] - p[0]) * (c[0] - p[0]) +
+                                        (c[1] - p[1]) * (c[1] - p[1]) +
+                                        (c[2] - p[2]) * (c[2] - p[2]));
+      targets.push_back({p[0] + t * (c[0] - p[0]), p[1] + t * (c[1] - p[1]),
+                         p[2] + t * (c[2] - p[2]), f});
+    }
+  }
+  const auto sources = core::sample_uniform(m, 6, 2);
+  std::vector<double> d;
+  for (const auto& source : sources) {
+    q.distances(source, targets, d);
+    const auto full = full_graph_distances(g, source, targets);
+    for (std::size_t j = 0; j < targets.size(); ++j) {
+      CAPTURE(j);
+      CHECK(d[j] == Approx(full[j]).epsilon(1e-12));
+    }
+  }
+}
+
 TEST_CASE("segment bounds: Dial's buckets only where no face is degenerate", "[core][geodesic]") {
   // A right triangle with legs 4 and 3 (hypotenuse 5), delta 2: 2, 1 and 2 Steiner points,
   // spacings 4/3, 3/2 and 5/3. Bound per corner: min of its two spacings times min(1, sin):
