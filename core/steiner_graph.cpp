@@ -269,8 +269,7 @@ std::size_t BucketQueue::ring_size(const SteinerGraph& graph) {
 }
 
 BucketQueue::BucketQueue(const SteinerGraph& graph)
-    : width_(bucket_width(graph)),
-      per_width_(1 / width_),
+    : per_width_(1 / bucket_width(graph)),
       ring_(ring_size(graph)),
       mask_(ring_.size() - 1) {}
 

@@ -227,10 +227,9 @@ class BucketQueue {
     // at least one width from the others) but for rounding, which the max guards against; and
     // b < bucket_ + ring size (no edge is longer than max_segment()). The width's margin covers
     // the rounding of multiplying by its inverse.
-    const std::uint64_t b = std::max(static_cast<std::uint64_t>(key * per_width_), bucket_);
+    const std::uint64_t b = bucket_of(key);
     // A node lowered within its bucket is there already.
-    const bool queued = l.dist < std::numeric_limits<double>::infinity() &&
-                        std::max(static_cast<std::uint64_t>(l.dist * per_width_), bucket_) == b;
+    const bool queued = l.dist < std::numeric_limits<double>::infinity() && bucket_of(l.dist) == b;
     l.dist = key;
     l.tag = tag;
     if (queued) return;
@@ -259,7 +258,11 @@ class BucketQueue {
     double dist;
     std::uint32_t tag;
   };
-  double width_, per_width_;
+  // The bucket a distance goes into: never one already emptied.
+  std::uint64_t bucket_of(double key) const {
+    return std::max(static_cast<std::uint64_t>(key * per_width_), bucket_);
+  }
+  double per_width_;  // 1 / bucket width
   std::vector<std::vector<std::uint32_t>> ring_;
   std::uint64_t mask_;  // ring size - 1
   std::vector<Label> label_;
