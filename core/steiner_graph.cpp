@@ -31,6 +31,22 @@ std::vector<std::tuple<std::uint64_t, std::uint32_t, int>> sorted_face_edges(con
   return e;
 }
 
+// The graph's node count (vertices and floor(len / delta) per edge; a double, so that a count
+// past 32 bits is seen) and edge count, from the sorted face edges.
+std::pair<double, std::size_t> count_nodes(
+    const TriMesh& m, const std::vector<std::tuple<std::uint64_t, std::uint32_t, int>>& e,
+    double delta) {
+  double nodes = static_cast<double>(m.vertex_count());
+  std::size_t edges = 0;
+  for (std::size_t i = 0; i < e.size(); ++i) {
+    if (i > 0 && std::get<0>(e[i]) == std::get<0>(e[i - 1])) continue;
+    ++edges;
+    const std::uint64_t key = std::get<0>(e[i]);
+    nodes += std::floor(dist3(&m.xyz[3 * (key >> 32)], &m.xyz[3 * (key & 0xFFFFFFFFu)]) / delta);
+  }
+  return {nodes, edges};
+}
+
 }  // namespace
 
 double mean_edge_length(const TriMesh& mesh) {
@@ -53,15 +69,7 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
   const auto e = sorted_face_edges(mesh);
   // Count the nodes before allocating any: a mesh far larger than delta (or with a non-finite
   // coordinate) is refused here, not by running out of memory.
-  double nodes = static_cast<double>(nv);
-  std::size_t edge_count = 0;
-  for (std::size_t i = 0; i < e.size(); ++i) {
-    if (i > 0 && std::get<0>(e[i]) == std::get<0>(e[i - 1])) continue;
-    ++edge_count;
-    const std::uint64_t key = std::get<0>(e[i]);
-    nodes +=
-        std::floor(dist3(&mesh.xyz[3 * (key >> 32)], &mesh.xyz[3 * (key & 0xFFFFFFFFu)]) / delta);
-  }
+  const auto [nodes, edge_count] = count_nodes(mesh, e, delta);
   if (!(nodes < static_cast<double>(kMaxNodes))) {
     throw std::invalid_argument("too many Steiner points (" + std::to_string(nodes) + "; at most " +
                                 std::to_string(kMaxNodes) + ")");
@@ -178,6 +186,20 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
       c.across_end = edge_first_[across + 1];
     }
   }
+}
+
+SteinerGraph::Estimate SteinerGraph::estimate(const TriMesh& mesh, double delta) {
+  const auto e = sorted_face_edges(mesh);
+  const auto [nodes, edges] = count_nodes(mesh, e, delta);
+  Estimate est;
+  est.nodes = nodes < static_cast<double>(kMaxNodes) ? static_cast<std::size_t>(nodes) : kMaxNodes;
+  // Per node its record; per edge its record and first node; per face its edges and 3 corners;
+  // per vertex its first corner; plus the sorted face edges construction holds meanwhile.
+  const std::size_t nf = mesh.faces.size();
+  est.bytes = est.nodes * sizeof(Node) + edges * (sizeof(Edge) + 4) +
+              nf * (sizeof(std::array<std::uint32_t, 3>) + 3 * sizeof(Corner)) +
+              4 * mesh.vertex_count() + e.size() * sizeof(e[0]);
+  return est;
 }
 
 void SteinerGraph::face_nodes(std::uint32_t f, std::vector<std::uint32_t>& out) const {
@@ -308,6 +330,13 @@ GeodesicQuery::GeodesicQuery(const SteinerGraph& graph, bool use_buckets)
   if (use_buckets && BucketQueue::ring_size(graph) > 0) {
     buckets_ = std::make_unique<BucketQueue>(graph);
   }
+}
+
+std::size_t GeodesicQuery::estimate_bytes(std::size_t nodes, std::size_t faces,
+                                          std::size_t targets) {
+  // note: the buckets hold the queued nodes (the search's frontier, far fewer than the nodes);
+  // an eighth of a label per node bounds them on the meshes measured.
+  return (nodes + targets) * 16 + nodes * 2 + faces * 4 + faces / 8 + targets * 16;
 }
 
 void GeodesicQuery::distances(const SurfacePoint& source, const std::vector<SurfacePoint>& targets,

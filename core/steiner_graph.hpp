@@ -43,6 +43,13 @@ class SteinerGraph {
   // kMaxNodes nodes (checked before allocating). The mesh must outlive the graph.
   SteinerGraph(const TriMesh& mesh, double delta);
 
+  // The graph's nodes (exact) and memory (bytes, construction's peak included) for mesh and
+  // delta, without building it: one sort of the face edges.
+  struct Estimate {
+    std::size_t nodes = 0, bytes = 0;
+  };
+  static Estimate estimate(const TriMesh& mesh, double delta);
+
   const TriMesh& mesh() const { return mesh_; }
   double delta() const { return delta_; }
   std::size_t node_count() const { return nodes_.size(); }
@@ -279,6 +286,11 @@ class GeodesicQuery {
   // Uses Dial's buckets where the graph allows (BucketQueue::ring_size), else a heap;
   // use_buckets = false forces the heap.
   explicit GeodesicQuery(const SteinerGraph& graph, bool use_buckets = true);
+
+  // The memory (bytes) of one query on a graph of `nodes` nodes over `faces` faces with
+  // `targets` targets: its labels (16 bytes per node and target), per-face target lists, and
+  // the queue's buckets.
+  static std::size_t estimate_bytes(std::size_t nodes, std::size_t faces, std::size_t targets);
 
   // Distances from source to each target: min over boundary nodes u of the source's face and
   // v of the target's face of |source u| + path(u, v) + |v target| (and the straight segment

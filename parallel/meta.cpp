@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <mutex>
@@ -247,14 +248,24 @@ PieceOutput simplify_piece(const io::DemInfo& dem, const core::Piece& p, std::si
 
 }  // namespace
 
-std::size_t peak_rss_kb() {
+namespace {
+
+// A "Name:   123 kB" line of /proc/self/status, in kB; 0 where unknown.
+std::size_t status_kb(const char* name) {
   std::ifstream status("/proc/self/status");
   std::string line;
+  const std::size_t n = std::strlen(name);
   while (std::getline(status, line)) {
-    if (line.rfind("VmHWM:", 0) == 0) return std::strtoull(line.c_str() + 6, nullptr, 10);
+    if (line.compare(0, n, name) == 0) return std::strtoull(line.c_str() + n, nullptr, 10);
   }
   return 0;
 }
+
+}  // namespace
+
+std::size_t peak_rss_kb() { return status_kb("VmHWM:"); }
+
+std::size_t rss_kb() { return status_kb("VmRSS:"); }
 
 namespace {
 

@@ -75,6 +75,8 @@ MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
 
 // Peak resident memory of this process so far in kB (Linux VmHWM), 0 where unknown.
 std::size_t peak_rss_kb();
+// Resident memory of this process now in kB (Linux VmRSS), 0 where unknown.
+std::size_t rss_kb();
 
 // Memory this process may still use, in bytes: the system's MemAvailable, or less when a
 // cgroup (v2 memory.max, v1 limit_in_bytes) limits it; SIZE_MAX where unknown.
