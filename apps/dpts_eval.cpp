@@ -22,6 +22,7 @@
 #include "io/json.hpp"
 #include "io/ply.hpp"
 #include "parallel/evaluate.hpp"
+#include "parallel/meta.hpp"
 
 namespace {
 
@@ -32,6 +33,7 @@ struct Options {
   dpts::par::EvalOptions eval;
   double snap_m = -1;  // < 0: default
   int threads = 0;
+  std::size_t max_memory_mb = 0;  // 0: what is available when the geodesics start
   bool json = false, quiet = false, help = false, version = false;
 };
 
@@ -57,6 +59,10 @@ coverage, faces over no-data) and its vertical error at every valid cell centre.
                      (default 0, or half a cell when the DEM is reprojected)
   --t-srs CRS        the mesh's CRS when dpts-par was given --t-srs
   --threads N        worker threads (default: all cores)
+  --max-memory MB    memory the run may use (default: what is available when the geodesics
+                     start); each search needs 16 bytes per Steiner node, so fewer threads
+                     search at once when all do not fit, and a run that does not fit with one
+                     is refused before the graphs are built
   --json             print one JSON object with all figures as the last line
   --quiet            only the JSON line (or nothing but errors)
   --help, --version
@@ -93,6 +99,8 @@ Options parse(const std::vector<std::string>& args) {
       o.t_srs = value();
     } else if (a == "--threads") {
       o.threads = dpts::cli::parse_number<int>(a, value(), 1, "an integer >= 1");
+    } else if (a == "--max-memory") {
+      o.max_memory_mb = dpts::cli::parse_number<std::size_t>(a, value(), 1, "an integer >= 1 (MB)");
     } else if (a == "--json") {
       o.json = true;
     } else if (a == "--quiet" || a == "-q") {
@@ -178,6 +186,18 @@ int run(const Options& o) {
 
   par::EvalOptions eo = o.eval;
   eo.snap_m = snap;
+  // What the geodesics may use: the limit less what the run holds already, or what is free.
+  if (o.max_memory_mb > 0) {
+    const std::size_t limit = o.max_memory_mb << 20, held = par::rss_kb() << 10;
+    if (limit <= held) {
+      throw InputError("--max-memory " + std::to_string(o.max_memory_mb) + ": the run holds " +
+                       par::format_bytes(static_cast<double>(held)) +
+                       " (DEM and meshes) before its geodesics start");
+    }
+    eo.memory_budget_bytes = limit - held;
+  } else {
+    eo.memory_budget_bytes = par::available_memory_bytes();
+  }
   // Progress: one line per stage on stderr once the run has lasted a second (not with --quiet).
   const par::StageProgress progress = [&](const std::string& what) {
     const double elapsed =
@@ -210,6 +230,12 @@ int run(const Options& o) {
         rmse, vmax, measured, uncovered);
     std::printf("steiner graphs   delta %.4f m: T %zu nodes (%.2f s), T' %zu nodes (%.2f s)\n",
                 r.delta_m, r.original_nodes, r.original_s, r.simplified_nodes, r.simplified_s);
+    const std::string bound =
+        r.max_searches ? "at most " + std::to_string(r.max_searches) + " searches at once"
+                       : "no bound on searches";
+    std::printf("memory           graphs about %s, a search %s (%s)\n",
+                par::format_bytes(static_cast<double>(r.graphs_bytes)).c_str(),
+                par::format_bytes(static_cast<double>(r.search_bytes)).c_str(), bound.c_str());
     std::printf(
         "searched         %.1f %% of T, %.1f %% of T' per query on average (pairs measured one "
         "way: %zu on T, %zu on T')\n",
@@ -245,6 +271,9 @@ int run(const Options& o) {
                      .add("one_way_pairs_dem", r.original_one_way)
                      .add("one_way_pairs_mesh", r.simplified_one_way)
                      .add("snapped_points", r.snapped)
+                     .add("memory_graphs_bytes", r.graphs_bytes)
+                     .add("memory_search_bytes", r.search_bytes)
+                     .add("max_searches", r.max_searches)
                      .add("faces_not_ccw", mc.clockwise_or_flat)
                      .add("bad_edges", mc.bad_edges)
                      .add("faces_over_nodata", over_nodata)

@@ -12,11 +12,13 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 #include <utility>
 
 #include "core/errors.hpp"
 #include "core/surface_sampling.hpp"
+#include "parallel/meta.hpp"
 
 namespace dpts::par {
 
@@ -109,12 +111,11 @@ std::vector<double> meeting_radii(const std::vector<double>& c, std::size_t k) {
   return r;
 }
 
-}  // namespace
-
-std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
-                                       const std::vector<core::SurfacePoint>& points,
-                                       double* settled, PairwiseMethod method,
-                                       std::size_t* one_way_pairs) {
+// pairwise_distances in the current arena, at most max_kept finished meet queries waiting.
+std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
+                                      const std::vector<core::SurfacePoint>& points,
+                                      double* settled, PairwiseMethod method,
+                                      std::size_t* one_way_pairs, std::size_t max_kept) {
   const std::size_t k = points.size();
   std::vector<double> out(k * k, 0.0);
   std::vector<char> need(k * k, 0);
@@ -190,7 +191,6 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
   std::condition_variable cv;
   std::size_t kept_count = 0;
   const auto workers = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
-  const std::size_t max_kept = 2 * workers;
   std::size_t next = pilots;  // the next source to search (under m)
   auto join = [&](std::size_t a, std::size_t b, const core::GeodesicQuery& qb) {
     double best = inf;
@@ -297,9 +297,42 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
   if (settled) {
     for (std::size_t n : settled_by) *settled += static_cast<double>(n);
   }
+  kept.clear();  // the one-way queries below take their memory
+  pool.clear();
   if (left_count > 0) measure_one_way(graph, points, left, out, settled);
   if (one_way_pairs) *one_way_pairs += left_count;
   return out;
+}
+
+}  // namespace
+
+std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
+                                       const std::vector<core::SurfacePoint>& points,
+                                       double* settled, PairwiseMethod method,
+                                       std::size_t* one_way_pairs, std::size_t max_searches) {
+  const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
+  std::size_t workers = threads, max_kept = 2 * threads;
+  if (max_searches > 0) {
+    if (max_searches < min_searches(method)) {
+      throw std::invalid_argument("pairwise_distances: fewer searches than it needs at once");
+    }
+    // note: one way, each worker holds one query. Meeting, a worker starts a search only while
+    // fewer than max_kept finished ones wait, and every other worker holds one: at most
+    // max_kept + workers - 1 at once (the one-way leftovers run after those are freed). As many
+    // workers as leave each a waiting place (max_kept >= workers), up to 2 each.
+    if (method == PairwiseMethod::kMeet) {
+      workers = std::min(threads, std::max<std::size_t>(1, (max_searches + 1) / 2));
+      max_kept = std::min(2 * workers, max_searches + 1 - workers);
+    } else {
+      workers = std::min(threads, max_searches);
+    }
+  }
+  if (workers == threads) {
+    return pairwise_in_arena(graph, points, settled, method, one_way_pairs, max_kept);
+  }
+  tbb::task_arena arena(static_cast<int>(workers));
+  return arena.execute(
+      [&] { return pairwise_in_arena(graph, points, settled, method, one_way_pairs, max_kept); });
 }
 
 EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh& simplified,
@@ -310,6 +343,31 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
   EvalResult result;
   result.delta_m = options.delta_m > 0 ? options.delta_m
                                        : kDefaultDeltaFactor * core::mean_edge_length(original);
+  const auto k = static_cast<std::size_t>(options.points);
+  // Memory: both graphs, and as many searches on T (the larger graph) as the budget holds.
+  const auto est_t = core::SteinerGraph::estimate(original, result.delta_m);
+  const auto est_s = core::SteinerGraph::estimate(simplified, result.delta_m);
+  result.graphs_bytes = est_t.bytes + est_s.bytes;
+  result.search_bytes = core::GeodesicQuery::estimate_bytes(
+      std::max(est_t.nodes, est_s.nodes), std::max(original.faces.size(), simplified.faces.size()),
+      k);
+  if (options.memory_budget_bytes > 0) {
+    const std::size_t need =
+        result.graphs_bytes + min_searches(options.method) * result.search_bytes;
+    if (need > options.memory_budget_bytes) {
+      throw InputError(
+          "the geodesics need about " + format_bytes(static_cast<double>(need)) +
+          " (Steiner graphs " + format_bytes(static_cast<double>(result.graphs_bytes)) + ", " +
+          std::to_string(min_searches(options.method)) + " searches of " +
+          format_bytes(static_cast<double>(result.search_bytes)) + "), more than the " +
+          format_bytes(static_cast<double>(options.memory_budget_bytes)) +
+          " available (--max-memory); use a larger --delta");
+    }
+    // note: unbounded, a run holds at most 3 per thread less one (pairwise_distances).
+    const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
+    result.max_searches = std::min(
+        (options.memory_budget_bytes - result.graphs_bytes) / result.search_bytes, 3 * threads - 1);
+  }
   const core::SteinerGraph graph_t(original, result.delta_m);
   const core::SteinerGraph graph_s(simplified, result.delta_m);
   result.original_nodes = graph_t.node_count();
@@ -317,7 +375,6 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
   stage("Steiner graphs: T " + std::to_string(result.original_nodes) + " nodes, T' " +
         std::to_string(result.simplified_nodes) + " nodes");
   const core::PointLocator locate_s(simplified);
-  const auto k = static_cast<std::size_t>(options.points);
   double settled_t = 0, settled_s = 0;
   for (int set = 0; set < options.sets; ++set) {
     const std::uint64_t seed =
@@ -343,12 +400,12 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
         "set " + std::to_string(set + 1) + "/" + std::to_string(options.sets);
     stage(set_name + ": geodesics on T");
     auto t0 = std::chrono::steady_clock::now();
-    const std::vector<double> dt =
-        pairwise_distances(graph_t, on_t, &settled_t, options.method, &result.original_one_way);
+    const std::vector<double> dt = pairwise_distances(
+        graph_t, on_t, &settled_t, options.method, &result.original_one_way, result.max_searches);
     auto t1 = std::chrono::steady_clock::now();
     stage(set_name + ": geodesics on T'");
-    const std::vector<double> ds =
-        pairwise_distances(graph_s, on_s, &settled_s, options.method, &result.simplified_one_way);
+    const std::vector<double> ds = pairwise_distances(
+        graph_s, on_s, &settled_s, options.method, &result.simplified_one_way, result.max_searches);
     auto t2 = std::chrono::steady_clock::now();
     result.original_s += std::chrono::duration<double>(t1 - t0).count();
     result.simplified_s += std::chrono::duration<double>(t2 - t1).count();

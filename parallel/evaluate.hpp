@@ -27,12 +27,20 @@ enum class PairwiseMethod {
 // i < j (the rest 0). Sequential Dijkstra queries spread over oneTBB tasks, scratch per
 // thread: the figures are the same for any thread count. If `settled` is given, the graph
 // nodes settled by all the queries are added to it; if `one_way_pairs` is, the pairs that were
-// measured one way.
+// measured one way. At most `max_searches` queries (each with its labels for every node) exist
+// at once, fewer threads working if need be (0: no bound; at least min_searches(method) must
+// be allowed); the figures do not depend on it.
 std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
                                        const std::vector<core::SurfacePoint>& points,
                                        double* settled = nullptr,
                                        PairwiseMethod method = PairwiseMethod::kMeet,
-                                       std::size_t* one_way_pairs = nullptr);
+                                       std::size_t* one_way_pairs = nullptr,
+                                       std::size_t max_searches = 0);
+// The fewest queries pairwise_distances needs at once: 2 when meeting in the middle (one
+// searching while a finished one waits for its joins), 1 one way.
+inline std::size_t min_searches(PairwiseMethod method) {
+  return method == PairwiseMethod::kMeet ? 2 : 1;
+}
 
 struct EvalOptions {
   int points = 100;  // K points per set
@@ -41,6 +49,10 @@ struct EvalOptions {
   double delta_m = 0;  // Steiner spacing; 0: kDefaultDeltaFactor x mean edge of T
   double snap_m = 0;   // points outside T' within this distance are snapped onto it
   PairwiseMethod method = PairwiseMethod::kMeet;
+  // Memory the geodesics may use (Steiner graphs and searches), 0: no bound. More threads than
+  // fit work fewer at a time; a run that does not fit with one is refused before the graphs
+  // are built (InputError).
+  std::size_t memory_budget_bytes = 0;
 };
 
 // Default Steiner spacing as a fraction of the mean 3D edge length of the original TIN.
@@ -57,6 +69,9 @@ struct EvalResult {
   double original_searched = 0, simplified_searched = 0;
   // Pairs measured one way (all of them with kOneWay; with kMeet those the radii missed).
   std::size_t original_one_way = 0, simplified_one_way = 0;
+  // Estimated memory of the geodesics: the two graphs, one search on T; and how many searches
+  // the memory budget let exist at once (0: no bound).
+  std::size_t graphs_bytes = 0, search_bytes = 0, max_searches = 0;
 };
 
 // Samples K points uniformly in T's footprint per set (seeded by seed and set), lifts them onto

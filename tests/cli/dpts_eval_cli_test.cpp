@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <fstream>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include "test_support.hpp"
 
@@ -64,6 +66,42 @@ TEST_CASE("dpts-eval refuses bad usage with exit 2 and bad meshes with exit 1", 
   const auto junk = test::run(kEval, {"--dem", fx.dem, "--mesh", (fx.dir / "junk.ply").string()});
   CHECK(junk.exit_code == 1);
   CHECK(junk.err.find("junk.ply") != std::string::npos);
+}
+
+TEST_CASE("dpts-eval keeps to --max-memory or refuses in one line", "[cli][eval][memory]") {
+  Fixture fx;
+  const auto mesh = (fx.dir / "m.ply").string();
+  REQUIRE(test::run(kPar, {"--quiet", "--keep", "30%", fx.dem, mesh}).exit_code == 0);
+  const std::vector<std::string> base = {"--dem",    fx.dem, "--mesh",  mesh,
+                                         "--points", "20",   "--quiet", "--json"};
+  auto with = [&](std::vector<std::string> extra) {
+    extra.insert(extra.begin(), base.begin(), base.end());
+    return test::run(kEval, extra);
+  };
+  const auto zero = with({"--max-memory", "0"});
+  CHECK(zero.exit_code == 2);
+  CHECK(zero.err.rfind("dpts-eval: --max-memory 0: expected an integer >= 1 (MB)", 0) == 0);
+  // Less than the DEM and meshes already hold.
+  const auto tiny = with({"--max-memory", "1"});
+  CHECK(tiny.exit_code == 1);
+  CHECK(tiny.out.empty());
+  CHECK(tiny.err.rfind("dpts-eval: error: --max-memory 1: the run holds ", 0) == 0);
+  CHECK(std::count(tiny.err.begin(), tiny.err.end(), '\n') == 1);
+  // Room for the run but not for its Steiner graphs: a delta of 0.1 mm makes them huge.
+  const auto fine = with({"--max-memory", "200", "--delta", "0.0001"});
+  CHECK(fine.exit_code == 1);
+  CHECK(fine.err.rfind("dpts-eval: error: the geodesics need about ", 0) == 0);
+  CHECK(fine.err.find("available (--max-memory); use a larger --delta\n") != std::string::npos);
+  // Enough: the same figures as with no limit given.
+  const auto ok = with({"--max-memory", "2000"});
+  const auto free_run = with({});
+  REQUIRE(ok.exit_code == 0);
+  REQUIRE(free_run.exit_code == 0);
+  auto error_of = [](const std::string& js) {
+    const auto at = js.find("\"distance_error\":");
+    return js.substr(at, js.find(',', at) - at);
+  };
+  CHECK(error_of(ok.out) == error_of(free_run.out));
 }
 
 TEST_CASE("dpts-eval answers each malformed mesh clearly", "[cli][eval][robust]") {

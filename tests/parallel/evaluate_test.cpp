@@ -135,3 +135,67 @@ TEST_CASE("meeting in the middle gives the distances of one-way queries",
     CHECK(settled_meet < settled_one_way);
   }
 }
+
+TEST_CASE("a memory budget bounds the searches at once, with the same figures",
+          "[parallel][evaluate][memory]") {
+  const auto g = hills();
+  const auto t = hills_grid_mesh(g);
+  const auto s = simplified(g, 20.0);
+  par::EvalOptions opt;
+  opt.points = 30;
+  opt.sets = 1;
+  tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+  const auto free_run = par::evaluate_distances(t, s, opt);
+  CHECK(free_run.max_searches == 0);
+  REQUIRE(free_run.search_bytes > 0);
+  // Graphs and two searches on T: one worker, one finished search waiting for its joins.
+  opt.memory_budget_bytes = free_run.graphs_bytes + 2 * free_run.search_bytes;
+  const auto two = par::evaluate_distances(t, s, opt);
+  CHECK(two.max_searches == 2);
+  CHECK(two.set_errors == free_run.set_errors);
+  // Plenty: 3 per thread less one.
+  opt.memory_budget_bytes = free_run.graphs_bytes + 100 * free_run.search_bytes;
+  CHECK(par::evaluate_distances(t, s, opt).max_searches == 5);
+  // One search short.
+  opt.memory_budget_bytes = free_run.graphs_bytes + 2 * free_run.search_bytes - 1;
+  CHECK_THROWS_AS(par::evaluate_distances(t, s, opt), InputError);
+  CHECK_THROWS_WITH(
+      par::evaluate_distances(t, s, opt),
+      Catch::Matches("the geodesics need about .* \\(Steiner graphs .*, 2 searches of "
+                     ".*\\), more than the .* available \\(--max-memory\\); use a "
+                     "larger --delta"));
+}
+
+TEST_CASE("the graph estimate counts the nodes of the graph", "[parallel][evaluate][memory]") {
+  const auto g = hills();
+  for (const auto& mesh : {hills_grid_mesh(g), simplified(g, 20.0)}) {
+    for (double delta : {2.0, 5.0, 20.0}) {
+      CAPTURE(delta);
+      const core::SteinerGraph graph(mesh, delta);
+      const auto est = core::SteinerGraph::estimate(mesh, delta);
+      CHECK(est.nodes == graph.node_count());
+      CHECK(est.bytes > 32 * graph.node_count());
+    }
+  }
+}
+
+TEST_CASE("pairwise distances with a bound on searches give the same distances",
+          "[parallel][evaluate][memory]") {
+  const auto g = hills();
+  const auto t = hills_grid_mesh(g);
+  const core::SteinerGraph graph(t, 0.25 * core::mean_edge_length(t));
+  const auto points = core::sample_uniform(t, 25, 9);
+  tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+  const auto free_run = par::pairwise_distances(graph, points);
+  for (std::size_t bound : {2, 3, 4}) {
+    CAPTURE(bound);
+    CHECK(par::pairwise_distances(graph, points, nullptr, par::PairwiseMethod::kMeet, nullptr,
+                                  bound) == free_run);
+  }
+  CHECK_THROWS_AS(
+      par::pairwise_distances(graph, points, nullptr, par::PairwiseMethod::kMeet, nullptr, 1),
+      std::invalid_argument);
+  const auto one_way =
+      par::pairwise_distances(graph, points, nullptr, par::PairwiseMethod::kOneWay, nullptr, 1);
+  CHECK(one_way.size() == free_run.size());
+}
