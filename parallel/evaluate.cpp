@@ -111,6 +111,13 @@ std::vector<double> meeting_radii(const std::vector<double>& c, std::size_t k) {
   return r;
 }
 
+// Finished meet searches that may wait for their joins, per worker: beyond its own search a
+// worker has up to this many waiting, so that it rarely idles for a join.
+constexpr std::size_t kKeptPerWorker = 2;
+
+// The most searches pairwise_distances holds at once with no bound given.
+std::size_t unbounded_searches(std::size_t threads) { return (1 + kKeptPerWorker) * threads - 1; }
+
 // pairwise_distances in the current arena, at most max_kept finished meet queries waiting.
 std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
                                       const std::vector<core::SurfacePoint>& points,
@@ -311,7 +318,7 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
                                        double* settled, PairwiseMethod method,
                                        std::size_t* one_way_pairs, std::size_t max_searches) {
   const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
-  std::size_t workers = threads, max_kept = 2 * threads;
+  std::size_t workers = threads, max_kept = kKeptPerWorker * threads;
   if (max_searches > 0) {
     if (max_searches < min_searches(method)) {
       throw std::invalid_argument("pairwise_distances: fewer searches than it needs at once");
@@ -319,10 +326,10 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
     // note: one way, each worker holds one query. Meeting, a worker starts a search only while
     // fewer than max_kept finished ones wait, and every other worker holds one: at most
     // max_kept + workers - 1 at once (the one-way leftovers run after those are freed). As many
-    // workers as leave each a waiting place (max_kept >= workers), up to 2 each.
+    // workers as leave each a waiting place (max_kept >= workers), up to kKeptPerWorker each.
     if (method == PairwiseMethod::kMeet) {
       workers = std::min(threads, std::max<std::size_t>(1, (max_searches + 1) / 2));
-      max_kept = std::min(2 * workers, max_searches + 1 - workers);
+      max_kept = std::min(kKeptPerWorker * workers, max_searches + 1 - workers);
     } else {
       workers = std::min(threads, max_searches);
     }
@@ -363,10 +370,10 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
           format_bytes(static_cast<double>(options.memory_budget_bytes)) +
           " available (--max-memory); use a larger --delta");
     }
-    // note: unbounded, a run holds at most 3 per thread less one (pairwise_distances).
     const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
-    result.max_searches = std::min(
-        (options.memory_budget_bytes - result.graphs_bytes) / result.search_bytes, 3 * threads - 1);
+    result.max_searches =
+        std::min((options.memory_budget_bytes - result.graphs_bytes) / result.search_bytes,
+                 unbounded_searches(threads));
   }
   const core::SteinerGraph graph_t(original, result.delta_m);
   const core::SteinerGraph graph_s(simplified, result.delta_m);
