@@ -198,12 +198,27 @@ int run(const Options& o) {
   } else {
     eo.memory_budget_bytes = par::available_memory_bytes();
   }
-  // Progress: one line per stage on stderr once the run has lasted a second (not with --quiet).
-  const par::StageProgress progress = [&](const std::string& what) {
+  // Progress on stderr once the run has lasted a second (not with --quiet): a line as each
+  // stage starts, and within a long geodesic stage one per tenth of its sources searched, at
+  // most every kProgressEvery seconds.
+  constexpr double kProgressEvery = 10;
+  double last_line = 0;
+  int last_tenth = 0;
+  const par::StageProgress progress = [&](const std::string& what, double fraction) {
     const double elapsed =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (!o.quiet && elapsed >= 1.0)
+    if (o.quiet || elapsed < 1.0) return true;
+    const int tenth = static_cast<int>(fraction * 10);
+    if (fraction == 0) {
       std::fprintf(stderr, "dpts-eval: %s (%.0f s)\n", what.c_str(), elapsed);
+    } else if (tenth > last_tenth && tenth < 10 && elapsed - last_line >= kProgressEvery) {
+      std::fprintf(stderr, "dpts-eval: %s: %d %% of the sources searched (%.0f s)\n", what.c_str(),
+                   10 * tenth, elapsed);
+    } else {
+      return true;
+    }
+    last_line = elapsed;
+    last_tenth = tenth;
     return true;  // note: dpts-eval writes no file, so Ctrl-C may simply end the process
   };
   par::EvalResult r;

@@ -36,9 +36,10 @@ double straight2(const std::vector<core::SurfacePoint>& points, std::size_t i, s
 // Measures the pairs i < j with need[i * K + j] into out[i * K + j]: each pair by a Dijkstra
 // from the endpoint that ranks the other nearer (straight-line distance), so that every query
 // stops at about its nearest half of the points instead of the farthest. Adds the settled
-// nodes to *settled.
+// nodes to `settled`; calls searched (if given) as each source is done.
 void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::SurfacePoint>& points,
-                     const std::vector<char>& need, std::vector<double>& out, double* settled) {
+                     const std::vector<char>& need, std::vector<double>& out, double& settled,
+                     const std::function<void()>& searched) {
   const std::size_t k = points.size();
   auto d2 = [&](std::size_t i, std::size_t j) { return straight2(points, i, j); };
   std::vector<std::vector<std::size_t>> rank(k, std::vector<std::size_t>(k, 0));
@@ -74,7 +75,10 @@ void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::Su
                       std::vector<core::SurfacePoint> targets;
                       std::vector<double> d;
                       for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                        if (assigned[i].empty()) continue;
+                        if (assigned[i].empty()) {
+                          if (searched) searched();
+                          continue;
+                        }
                         targets.clear();
                         for (std::size_t j : assigned[i]) targets.push_back(points[j]);
                         q->distances(points[i], targets, d);
@@ -83,11 +87,10 @@ void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::Su
                           const std::size_t j = assigned[i][t];
                           out[std::min(i, j) * k + std::max(i, j)] = d[t];
                         }
+                        if (searched) searched();
                       }
                     });
-  if (settled) {
-    for (std::size_t n : settled_by) *settled += static_cast<double>(n);
-  }
+  for (std::size_t n : settled_by) settled += static_cast<double>(n);
 }
 
 // Search radii for meeting in the middle: R_i + R_j >= c_ij for every pair, with the sum of
@@ -118,11 +121,12 @@ constexpr std::size_t kKeptPerWorker = 2;
 // The most searches pairwise_distances holds at once with no bound given.
 std::size_t unbounded_searches(std::size_t threads) { return (1 + kKeptPerWorker) * threads - 1; }
 
-// pairwise_distances in the current arena, at most max_kept finished meet queries waiting.
+// pairwise_distances in the current arena, at most max_kept finished meet queries waiting;
+// searched (if given) is called as each source's search is done.
 std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
                                       const std::vector<core::SurfacePoint>& points,
-                                      double* settled, PairwiseMethod method,
-                                      std::size_t* one_way_pairs, std::size_t max_kept) {
+                                      PairwiseMethod method, PairwiseStats& stats,
+                                      std::size_t max_kept, const std::function<void()>& searched) {
   const std::size_t k = points.size();
   std::vector<double> out(k * k, 0.0);
   std::vector<char> need(k * k, 0);
@@ -130,8 +134,8 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
     for (std::size_t j = i + 1; j < k; ++j) need[i * k + j] = 1;
   }
   if (method == PairwiseMethod::kOneWay || k < 3) {
-    measure_one_way(graph, points, need, out, settled);
-    if (one_way_pairs) *one_way_pairs += k * (k - 1) / 2;
+    measure_one_way(graph, points, need, out, stats.settled, searched);
+    stats.one_way_pairs += k * (k - 1) / 2;
     return out;
   }
   const double inf = std::numeric_limits<double>::infinity();
@@ -171,6 +175,7 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
         pilot_ratio[p] = std::max(pilot_ratio[p], far[t].second / far[t].first);
       }
     }
+    if (searched) searched();
   });
   const double ratio = *std::max_element(pilot_ratio.begin(), pilot_ratio.end());
   // note: a pair joins where the searches overlap by the longest segment at least (the last
@@ -233,6 +238,7 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
       for (std::size_t j = 0, t = 0; j < k; ++j) {
         if (j != i) direct[i * k + j] = d[t++];
       }
+      if (searched) searched();
       // Pairs to join now: (a, i) for the sources a before i with shells, and (i, b) for the
       // kept queries b after i. i's query is kept until its own joins are done and every
       // source before i has joined with it (waiting_for counts both).
@@ -301,13 +307,11 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
       }
     }
   }
-  if (settled) {
-    for (std::size_t n : settled_by) *settled += static_cast<double>(n);
-  }
+  for (std::size_t n : settled_by) stats.settled += static_cast<double>(n);
   kept.clear();  // the one-way queries below take their memory
   pool.clear();
-  if (left_count > 0) measure_one_way(graph, points, left, out, settled);
-  if (one_way_pairs) *one_way_pairs += left_count;
+  if (left_count > 0) measure_one_way(graph, points, left, out, stats.settled, nullptr);
+  stats.one_way_pairs += left_count;
   return out;
 }
 
@@ -315,8 +319,9 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
 
 std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
                                        const std::vector<core::SurfacePoint>& points,
-                                       double* settled, PairwiseMethod method,
-                                       std::size_t* one_way_pairs, std::size_t max_searches) {
+                                       const PairwiseOptions& options, PairwiseStats* stats) {
+  const PairwiseMethod method = options.method;
+  const std::size_t max_searches = options.max_searches;
   const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
   std::size_t workers = threads, max_kept = kKeptPerWorker * threads;
   if (max_searches > 0) {
@@ -334,18 +339,27 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
       workers = std::min(threads, max_searches);
     }
   }
-  if (workers == threads) {
-    return pairwise_in_arena(graph, points, settled, method, one_way_pairs, max_kept);
+  std::mutex report_mutex;
+  std::size_t searched_count = 0;
+  std::function<void()> searched;
+  if (options.on_search) {
+    searched = [&] {
+      std::lock_guard<std::mutex> lock(report_mutex);
+      options.on_search(++searched_count);
+    };
   }
+  PairwiseStats local;
+  PairwiseStats& st = stats ? *stats : local;
+  if (workers == threads) return pairwise_in_arena(graph, points, method, st, max_kept, searched);
   tbb::task_arena arena(static_cast<int>(workers));
   return arena.execute(
-      [&] { return pairwise_in_arena(graph, points, settled, method, one_way_pairs, max_kept); });
+      [&] { return pairwise_in_arena(graph, points, method, st, max_kept, searched); });
 }
 
 EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh& simplified,
                               const EvalOptions& options, const StageProgress& progress) {
   auto stage = [&](const std::string& what) {
-    if (progress && !progress(what)) throw Cancelled();
+    if (progress && !progress(what, 0.0)) throw Cancelled();
   };
   EvalResult result;
   result.delta_m = options.delta_m > 0 ? options.delta_m
@@ -382,7 +396,24 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
   stage("Steiner graphs: T " + std::to_string(result.original_nodes) + " nodes, T' " +
         std::to_string(result.simplified_nodes) + " nodes");
   const core::PointLocator locate_s(simplified);
-  double settled_t = 0, settled_s = 0;
+  // One geodesic stage, its progress reported as its searches finish.
+  auto geodesics = [&](const std::string& name, const core::SteinerGraph& graph,
+                       const std::vector<core::SurfacePoint>& points, PairwiseStats& stats) {
+    stage(name);
+    PairwiseOptions po;
+    po.method = options.method;
+    po.max_searches = result.max_searches;
+    bool stop = false;  // note: written under pairwise_distances' report lock, read after it
+    if (progress) {
+      po.on_search = [&](std::size_t searched) {
+        if (!progress(name, static_cast<double>(searched) / static_cast<double>(k))) stop = true;
+      };
+    }
+    std::vector<double> d = pairwise_distances(graph, points, po, &stats);
+    if (stop) throw Cancelled();
+    return d;
+  };
+  PairwiseStats stats_t, stats_s;
   for (int set = 0; set < options.sets; ++set) {
     const std::uint64_t seed =
         options.seed * 0x9E3779B97F4A7C15ull + static_cast<std::uint64_t>(set) + 1;
@@ -405,14 +436,11 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
     }
     const std::string set_name =
         "set " + std::to_string(set + 1) + "/" + std::to_string(options.sets);
-    stage(set_name + ": geodesics on T");
     auto t0 = std::chrono::steady_clock::now();
-    const std::vector<double> dt = pairwise_distances(
-        graph_t, on_t, &settled_t, options.method, &result.original_one_way, result.max_searches);
+    const std::vector<double> dt = geodesics(set_name + ": geodesics on T", graph_t, on_t, stats_t);
     auto t1 = std::chrono::steady_clock::now();
-    stage(set_name + ": geodesics on T'");
-    const std::vector<double> ds = pairwise_distances(
-        graph_s, on_s, &settled_s, options.method, &result.simplified_one_way, result.max_searches);
+    const std::vector<double> ds =
+        geodesics(set_name + ": geodesics on T'", graph_s, on_s, stats_s);
     auto t2 = std::chrono::steady_clock::now();
     result.original_s += std::chrono::duration<double>(t1 - t0).count();
     result.simplified_s += std::chrono::duration<double>(t2 - t1).count();
@@ -429,11 +457,13 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
     }
     result.set_errors.push_back(pairs ? sum / pairs : 0.0);
   }
+  result.original_one_way = stats_t.one_way_pairs;
+  result.simplified_one_way = stats_s.one_way_pairs;
   // note: k queries per set, one per source (a source with no pair to measure settles none).
   const double queries = static_cast<double>(k) * options.sets;
   if (queries > 0) {
-    result.original_searched = settled_t / (queries * result.original_nodes);
-    result.simplified_searched = settled_s / (queries * result.simplified_nodes);
+    result.original_searched = stats_t.settled / (queries * result.original_nodes);
+    result.simplified_searched = stats_s.settled / (queries * result.simplified_nodes);
   }
   double total = 0.0;
   for (double e : result.set_errors) total += e;

@@ -23,19 +23,33 @@ enum class PairwiseMethod {
   kMeet,
 };
 
+// How pairwise_distances works, and whom it tells of its progress.
+struct PairwiseOptions {
+  PairwiseMethod method = PairwiseMethod::kMeet;
+  // At most this many queries (each with its labels for every node) exist at once, fewer
+  // threads working if need be (0: no bound; at least min_searches(method) must be allowed);
+  // the figures do not depend on it.
+  std::size_t max_searches = 0;
+  // If given, called as each source's search finishes with the number of sources searched so
+  // far (1 to K; the few pairs left to one-way queries after meeting are not counted). Calls
+  // are serialized but come from any worker thread.
+  std::function<void(std::size_t searched)> on_search;
+};
+
+// What the queries of pairwise_distances did.
+struct PairwiseStats {
+  double settled = 0;             // graph nodes settled, all queries together
+  std::size_t one_way_pairs = 0;  // pairs measured one way
+};
+
 // Geodesic distances between all pairs of points on the graph's mesh: out[i * K + j] for
 // i < j (the rest 0). Sequential Dijkstra queries spread over oneTBB tasks, scratch per
-// thread: the figures are the same for any thread count. If `settled` is given, the graph
-// nodes settled by all the queries are added to it; if `one_way_pairs` is, the pairs that were
-// measured one way. At most `max_searches` queries (each with its labels for every node) exist
-// at once, fewer threads working if need be (0: no bound; at least min_searches(method) must
-// be allowed); the figures do not depend on it.
+// thread: the figures are the same for any thread count. If `stats` is given, what the
+// queries did is added to it.
 std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
                                        const std::vector<core::SurfacePoint>& points,
-                                       double* settled = nullptr,
-                                       PairwiseMethod method = PairwiseMethod::kMeet,
-                                       std::size_t* one_way_pairs = nullptr,
-                                       std::size_t max_searches = 0);
+                                       const PairwiseOptions& options = {},
+                                       PairwiseStats* stats = nullptr);
 // The fewest queries pairwise_distances needs at once: 2 when meeting in the middle (one
 // searching while a finished one waits for its joins), 1 one way.
 inline std::size_t min_searches(PairwiseMethod method) {
@@ -77,10 +91,12 @@ struct EvalResult {
 // Samples K points uniformly in T's footprint per set (seeded by seed and set), lifts them onto
 // T and T', and compares all pairwise geodesics. Throws InputError when sample points fall
 // outside T' (farther than snap_m), with their count.
-// `progress`, if given, is called from the serial points between the stages (graphs built, each
-// set's geodesics on T and on T') with a one-line description; returning false stops the run
-// with dpts::Cancelled.
-using StageProgress = std::function<bool(const std::string& stage)>;
+// `progress`, if given, is called with a one-line description of each stage as it starts
+// (graphs built, each set's geodesics on T and on T'), fraction 0, from the serial points
+// between them; and in the geodesic stages as each search finishes, with the fraction of the
+// sources searched (serialized, from worker threads). Returning false stops the run with
+// dpts::Cancelled (at the end of the stage when returned during one).
+using StageProgress = std::function<bool(const std::string& stage, double fraction)>;
 EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh& simplified,
                               const EvalOptions& options, const StageProgress& progress = nullptr);
 

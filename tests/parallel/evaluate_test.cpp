@@ -5,6 +5,9 @@
 
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "core/errors.hpp"
 #include "core/steiner_graph.hpp"
@@ -116,12 +119,11 @@ TEST_CASE("meeting in the middle gives the distances of one-way queries",
   for (const auto& mesh : {hills_grid_mesh(g), simplified(g, 20.0)}) {
     const core::SteinerGraph graph(mesh, 0.25 * core::mean_edge_length(hills_grid_mesh(g)));
     const auto points = core::sample_uniform(mesh, 40, 5);
-    std::size_t one_way = 0;
-    double settled_meet = 0, settled_one_way = 0;
-    const auto meet =
-        par::pairwise_distances(graph, points, &settled_meet, par::PairwiseMethod::kMeet, &one_way);
-    const auto ref =
-        par::pairwise_distances(graph, points, &settled_one_way, par::PairwiseMethod::kOneWay);
+    par::PairwiseStats meet_stats, one_way_stats;
+    par::PairwiseOptions one_way;
+    one_way.method = par::PairwiseMethod::kOneWay;
+    const auto meet = par::pairwise_distances(graph, points, {}, &meet_stats);
+    const auto ref = par::pairwise_distances(graph, points, one_way, &one_way_stats);
     const std::size_t k = points.size();
     for (std::size_t i = 0; i < k; ++i) {
       for (std::size_t j = i + 1; j < k; ++j) {
@@ -131,8 +133,9 @@ TEST_CASE("meeting in the middle gives the distances of one-way queries",
       }
     }
     // The searches met for most pairs, and searched less of the graph in all.
-    CHECK(one_way < k * (k - 1) / 4);
-    CHECK(settled_meet < settled_one_way);
+    CHECK(meet_stats.one_way_pairs < k * (k - 1) / 4);
+    CHECK(one_way_stats.one_way_pairs == k * (k - 1) / 2);
+    CHECK(meet_stats.settled < one_way_stats.settled);
   }
 }
 
@@ -187,15 +190,70 @@ TEST_CASE("pairwise distances with a bound on searches give the same distances",
   const auto points = core::sample_uniform(t, 25, 9);
   tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
   const auto free_run = par::pairwise_distances(graph, points);
+  par::PairwiseOptions bounded;
   for (std::size_t bound : {2, 3, 4}) {
     CAPTURE(bound);
-    CHECK(par::pairwise_distances(graph, points, nullptr, par::PairwiseMethod::kMeet, nullptr,
-                                  bound) == free_run);
+    bounded.max_searches = bound;
+    CHECK(par::pairwise_distances(graph, points, bounded) == free_run);
   }
-  CHECK_THROWS_AS(
-      par::pairwise_distances(graph, points, nullptr, par::PairwiseMethod::kMeet, nullptr, 1),
-      std::invalid_argument);
-  const auto one_way =
-      par::pairwise_distances(graph, points, nullptr, par::PairwiseMethod::kOneWay, nullptr, 1);
+  bounded.max_searches = 1;
+  CHECK_THROWS_AS(par::pairwise_distances(graph, points, bounded), std::invalid_argument);
+  bounded.method = par::PairwiseMethod::kOneWay;
+  const auto one_way = par::pairwise_distances(graph, points, bounded);
   CHECK(one_way.size() == free_run.size());
+}
+
+TEST_CASE("progress tells each stage as it starts and the sources searched in geodesic stages",
+          "[parallel][evaluate][progress]") {
+  const auto g = hills();
+  const auto t = hills_grid_mesh(g);
+  const auto s = simplified(g, 20.0);
+  par::EvalOptions opt;
+  opt.points = 12;
+  opt.sets = 2;
+  tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+  // note: no lock: the reports are serialized by contract (the TSan build checks it).
+  std::vector<std::pair<std::string, double>> calls;
+  par::evaluate_distances(t, s, opt, [&](const std::string& stage, double fraction) {
+    calls.emplace_back(stage, fraction);
+    return true;
+  });
+  std::vector<std::string> stages;
+  for (const auto& [stage, fraction] : calls) {
+    if (fraction == 0) stages.push_back(stage);
+  }
+  REQUIRE(stages.size() == 5);
+  CHECK(stages[0].rfind("Steiner graphs: T ", 0) == 0);
+  CHECK(stages[1] == "set 1/2: geodesics on T");
+  CHECK(stages[2] == "set 1/2: geodesics on T'");
+  CHECK(stages[3] == "set 2/2: geodesics on T");
+  CHECK(stages[4] == "set 2/2: geodesics on T'");
+  // Each geodesic stage: its start, then one report per source, 1/12 to 12/12 in order.
+  std::size_t i = 1;  // past the graphs' stage
+  while (i < calls.size() && calls[i].second == 0) {
+    const std::string stage = calls[i++].first;
+    for (int n = 1; n <= 12; ++n, ++i) {
+      REQUIRE(i < calls.size());
+      CHECK(calls[i].first == stage);
+      CHECK(calls[i].second == Approx(n / 12.0));
+    }
+  }
+  CHECK(i == calls.size());
+}
+
+TEST_CASE("progress answering false during a geodesic stage stops the run at its end",
+          "[parallel][evaluate][progress]") {
+  const auto g = hills();
+  const auto t = hills_grid_mesh(g);
+  par::EvalOptions opt;
+  opt.points = 12;
+  opt.sets = 2;
+  int searches = 0;
+  CHECK_THROWS_AS(par::evaluate_distances(t, t, opt,
+                                          [&](const std::string&, double fraction) {
+                                            if (fraction > 0) ++searches;
+                                            return fraction == 0;
+                                          }),
+                  Cancelled);
+  CHECK(searches == 12);  // the first geodesic stage's searches, none after it
 }
