@@ -51,14 +51,26 @@ core::TriMesh hills_grid_mesh(const core::HeightGrid& g) {
   return to_mesh(g, grid.cells, grid.faces);
 }
 
+// Evaluation options: K points per set, and sets.
+par::EvalOptions eval_options(int points, int sets) {
+  par::EvalOptions o;
+  o.points = points;
+  o.sets = sets;
+  return o;
+}
+
+// T and T' of most tests: the grid TIN of hills() and its 20 % simplification.
+std::pair<core::TriMesh, core::TriMesh> hills_and_20_percent() {
+  const auto g = hills();
+  return {hills_grid_mesh(g), simplified(g, 20.0)};
+}
+
 }  // namespace
 
 TEST_CASE("a mesh identical to the DEM grid has distance error 0", "[parallel][evaluate]") {
   const auto g = hills();
   const auto t = hills_grid_mesh(g);
-  par::EvalOptions opt;
-  opt.points = 20;
-  opt.sets = 2;
+  const auto opt = eval_options(20, 2);
   const auto r = par::evaluate_distances(t, t, opt);
   CHECK(r.set_errors.size() == 2);
   CHECK(r.distance_error == 0.0);
@@ -70,9 +82,7 @@ TEST_CASE("a mesh identical to the DEM grid has distance error 0", "[parallel][e
 TEST_CASE("the distance error grows as fewer vertices are kept", "[parallel][evaluate]") {
   const auto g = hills();
   const auto t = hills_grid_mesh(g);
-  par::EvalOptions opt;
-  opt.points = 25;
-  opt.sets = 2;
+  const auto opt = eval_options(25, 2);
   const double e50 = par::evaluate_distances(t, simplified(g, 50.0), opt).distance_error;
   const double e10 = par::evaluate_distances(t, simplified(g, 10.0), opt).distance_error;
   CHECK(e50 > 0);
@@ -81,11 +91,8 @@ TEST_CASE("the distance error grows as fewer vertices are kept", "[parallel][eva
 
 TEST_CASE("evaluation figures are identical for 1 and 2 threads",
           "[parallel][evaluate][determinism]") {
-  const auto g = hills();
-  const auto t = hills_grid_mesh(g);
-  const auto s = simplified(g, 20.0);
-  par::EvalOptions opt;
-  opt.points = 30;
+  const auto [t, s] = hills_and_20_percent();
+  const auto opt = eval_options(30, 3);
   std::vector<double> errors[2];
   for (int threads = 1; threads <= 2; ++threads) {
     tbb::global_control c(tbb::global_control::max_allowed_parallelism,
@@ -105,8 +112,7 @@ TEST_CASE("sample points outside the mesh are an error with their count", "[para
     if (t.xyz[3 * f[0]] < 170 && t.xyz[3 * f[1]] < 170 && t.xyz[3 * f[2]] < 170)
       half.faces.push_back(f);
   }
-  par::EvalOptions opt;
-  opt.points = 40;
+  const auto opt = eval_options(40, 3);
   CHECK_THROWS_WITH(
       par::evaluate_distances(t, half, opt),
       Catch::Matches(".*[0-9]+ of 40 sample points of set 1 lie outside the mesh's footprint"));
@@ -141,12 +147,8 @@ TEST_CASE("meeting in the middle gives the distances of one-way queries",
 
 TEST_CASE("a memory budget bounds the searches at once, with the same figures",
           "[parallel][evaluate][memory]") {
-  const auto g = hills();
-  const auto t = hills_grid_mesh(g);
-  const auto s = simplified(g, 20.0);
-  par::EvalOptions opt;
-  opt.points = 30;
-  opt.sets = 1;
+  const auto [t, s] = hills_and_20_percent();
+  auto opt = eval_options(30, 1);
   tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
   const auto free_run = par::evaluate_distances(t, s, opt);
   CHECK(free_run.max_searches == 0);
@@ -205,12 +207,8 @@ TEST_CASE("pairwise distances with a bound on searches give the same distances",
 
 TEST_CASE("progress tells each stage as it starts and the sources searched in geodesic stages",
           "[parallel][evaluate][progress]") {
-  const auto g = hills();
-  const auto t = hills_grid_mesh(g);
-  const auto s = simplified(g, 20.0);
-  par::EvalOptions opt;
-  opt.points = 12;
-  opt.sets = 2;
+  const auto [t, s] = hills_and_20_percent();
+  const auto opt = eval_options(12, 2);
   tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
   // note: no lock: the reports are serialized by contract (the TSan build checks it).
   std::vector<std::pair<std::string, double>> calls;
@@ -245,9 +243,7 @@ TEST_CASE("progress answering false during a geodesic stage stops the run at its
           "[parallel][evaluate][progress]") {
   const auto g = hills();
   const auto t = hills_grid_mesh(g);
-  par::EvalOptions opt;
-  opt.points = 12;
-  opt.sets = 2;
+  const auto opt = eval_options(12, 2);
   int searches = 0;
   CHECK_THROWS_AS(par::evaluate_distances(t, t, opt,
                                           [&](const std::string&, double fraction) {
