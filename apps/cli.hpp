@@ -58,6 +58,10 @@ T parse_number(const std::string& flag, const std::string& text, T min, const ch
   return value;
 }
 
+// Whether two paths name the same file (the same inode, or the same path once resolved):
+// outputs must not overwrite inputs.
+bool same_file(const std::string& a, const std::string& b);
+
 // The memory a run may use, in bytes: --max-memory, or what the system has available now.
 std::size_t memory_limit_bytes(const ParOptions& o);
 

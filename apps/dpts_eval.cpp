@@ -7,20 +7,29 @@
 #include <tbb/info.h>
 
 #include <algorithm>
+#include <atomic>
+#include <cerrno>
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <optional>
 
 #include "apps/cli.hpp"
 #include "core/errors.hpp"
 #include "core/footprint.hpp"
 #include "core/mesh_check.hpp"
 #include "core/surface_sampling.hpp"
+#include "io/atomic_output_file.hpp"
 #include "io/dem_reader.hpp"
 #include "io/json.hpp"
 #include "io/ply.hpp"
+#include "io/sample_points.hpp"
 #include "parallel/evaluate.hpp"
 #include "parallel/meta.hpp"
 
@@ -28,8 +37,18 @@ namespace {
 
 using dpts::UsageError;
 
+// Set by SIGINT/SIGTERM while a --pairs-out file is being made: the run stops at the next
+// progress call and the file's temporary is removed. A lock-free atomic (signal-safe).
+std::atomic<int> g_cancel{0};
+static_assert(std::atomic<int>::is_always_lock_free);
+extern "C" void on_signal(int sig) {
+  g_cancel.store(1, std::memory_order_relaxed);
+  std::signal(sig, SIG_DFL);  // note: a second signal ends the process at once
+}
+
 struct Options {
   std::string dem, mesh, t_srs;
+  std::string sample_points, pairs_out;  // --sample-points FILE.csv, --pairs-out FILE.csv
   dpts::par::EvalOptions eval;
   double snap_m = -1;  // < 0: default
   int threads = 0;
@@ -42,9 +61,11 @@ const char* kHelp = R"(usage: dpts-eval --dem DEM --mesh MESH.ply [options]
 Measures how well a TIN preserves the surface (geodesic) distances of the DEM it was made
 from (the DPTS paper): for K random points uniform in the DEM's valid footprint, the error
 is the mean over all pairs of |GD_T - GD_T'| / GD_T, where T is the DEM's full-resolution
-grid TIN and T' the mesh, and geodesics are shortest paths on the Steiner graph (points every
-delta along edges, each triangle's boundary points pairwise connected). The result is the
-mean over independent sets. Also reports the mesh's validity over the DEM (orientation,
+grid TIN and T' the mesh. Geodesics are found on the paper's Steiner graph (points every
+delta along edges, each triangle's boundary points pairwise connected), then each path is
+unfolded and pulled taut into an exact, locally shortest geodesic (about 0.005 % above exact
+on average on real DEMs at the default delta; --steiner keeps the paper's Steiner distances,
+0.7 % above). The result is the mean over independent sets. Also reports the mesh's validity over the DEM (orientation,
 coverage, faces over no-data) and its vertical error at every valid cell centre.
 
   --dem DEM          the original DEM (any raster GDAL reads; band 1)
@@ -53,8 +74,26 @@ coverage, faces over no-data) and its vertical error at every valid cell centre.
   --points K         points per set (default 100)
   --sets S           independent sets (default 3)
   --seed N           seed of the sample points (default 1)
-  --delta D          Steiner spacing in metres (default: 0.25 x the mean edge length of T,
-                     which keeps Steiner distances within 1 % of exact geodesics on average)
+  --sample-points FILE.csv
+                     measure these points instead of random ones: a header line exactly
+                     set,x,y then one point a line (x, y in the mesh's CRS; point i of set s is
+                     the i-th line of set s, both counted from 0; sets numbered 0 to S-1 without
+                     gaps, each with the same number of points, at least 2); gives K and S, so
+                     --points, --sets and --seed are refused with it
+  --pairs-out FILE.csv
+                     write set,i,j,gd_T,gd_S,rel_err for every pair i < j of every set (sets
+                     from 0; gd inf where not connected, rel_err empty where not measured);
+                     the file appears only when the run succeeds
+  --exact            exact geodesics (CGAL's Surface_mesh_shortest_path, Xin-Wang) instead of
+                     the Steiner graph: a reference for small DEMs only, each source costing
+                     about 0.75 s and 250 MB on a 100 x 100 grid, one per thread at once (not
+                     bounded: --max-memory and --delta are refused with it); the mesh must be a
+                     manifold surface with consistent orientation (no folded faces)
+  --steiner          the paper's Steiner distances, not straightened (searched meeting in
+                     the middle: faster, but 0.7 % long on average at the default delta, a
+                     bias as large as the error measured on good meshes)
+  --delta D          Steiner spacing in metres (default: 0.25 x the mean edge length of T;
+                     smaller finds the shortest route in more near ties, at more cost)
   --snap M           points outside the mesh by at most M metres are moved onto it
                      (default 0, or half a cell when the DEM is reprojected)
   --t-srs CRS        the mesh's CRS when dpts-par was given --t-srs
@@ -66,17 +105,25 @@ coverage, faces over no-data) and its vertical error at every valid cell centre.
   --json             print one JSON object with all figures as the last line
   --quiet            only the JSON line (or nothing but errors)
   --help, --version
-Exit status: 0 ok, 1 failure (bad input, points outside the mesh), 2 bad usage.
+A mesh given as a triangle soup (each face with its own corners) is welded first: vertices at
+identical x, y, z are merged (reported). The run fails (exit 1, one line) when sample points
+lie outside the mesh (or, given, outside the DEM), when pairs connected on T are not on the
+mesh (a mesh in parts or slit: their count), or when an output cannot be written. Pairs not
+connected on T (islands of valid cells) cannot be measured: they are left out and counted.
+Exit status: 0 ok, 1 failure (bad input, points outside the mesh, a failed write), 2 bad usage.
 )";
 
 Options parse(const std::vector<std::string>& args) {
   Options o;
+  // Flags given explicitly, for the combinations refused.
+  std::vector<std::string> given;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
     auto value = [&]() -> std::string {
       if (i + 1 >= args.size()) throw UsageError(a + ": missing value");
       return args[++i];
     };
+    if (a.rfind("--", 0) == 0) given.push_back(a);
     if (a == "--help" || a == "-h") {
       o.help = true;
     } else if (a == "--version") {
@@ -101,6 +148,14 @@ Options parse(const std::vector<std::string>& args) {
       o.threads = dpts::cli::parse_number<int>(a, value(), 1, "an integer >= 1");
     } else if (a == "--max-memory") {
       o.max_memory_mb = dpts::cli::parse_number<std::size_t>(a, value(), 1, "an integer >= 1 (MB)");
+    } else if (a == "--sample-points") {
+      o.sample_points = value();
+    } else if (a == "--pairs-out") {
+      o.pairs_out = value();
+    } else if (a == "--exact") {
+      o.eval.exact = true;
+    } else if (a == "--steiner") {
+      o.eval.straighten = false;
     } else if (a == "--json") {
       o.json = true;
     } else if (a == "--quiet" || a == "-q") {
@@ -112,17 +167,86 @@ Options parse(const std::vector<std::string>& args) {
   if (!o.help && !o.version && (o.dem.empty() || o.mesh.empty())) {
     throw UsageError("expected --dem DEM and --mesh MESH.ply");
   }
+  auto has = [&](const char* flag) {
+    return std::find(given.begin(), given.end(), flag) != given.end();
+  };
+  auto refuse = [&](const char* a, const char* b, const char* why) {
+    if (has(a) && has(b)) throw UsageError(std::string(a) + " and " + b + " cannot be combined (" + why + ")");
+  };
+  for (const char* flag : {"--points", "--sets", "--seed"}) {
+    refuse("--sample-points", flag, "the file gives the points and sets");
+  }
+  refuse("--exact", "--delta", "exact geodesics have no Steiner spacing");
+  refuse("--exact", "--steiner", "one kind of geodesics at a time");
+  refuse("--exact", "--max-memory", "the memory of exact geodesics is not bounded");
+  if (!o.pairs_out.empty()) {
+    for (const std::string* input : {&o.dem, &o.mesh, &o.sample_points}) {
+      if (!input->empty() && dpts::cli::same_file(o.pairs_out, *input)) {
+        throw UsageError("--pairs-out " + o.pairs_out + ": is an input of the run");
+      }
+    }
+  }
   return o;
 }
+
+// Standard output after everything is printed: a failed write (a full disk) is an error.
+void check_stdout() {
+  errno = 0;
+  std::cout.flush();
+  if (std::fflush(stdout) != 0 || std::ferror(stdout) || !std::cout) {
+    const int err = errno;
+    throw dpts::IoError(std::string("standard output: write failed") +
+                        (err ? std::string(" (") + std::strerror(err) + ")" : std::string()));
+  }
+}
+
+// --pairs-out: a file appears only complete (AtomicOutputFile: nothing when the run fails); a
+// device or pipe that exists (/dev/stdout) is written to directly, its writes checked.
+class PairsOutput {
+ public:
+  explicit PairsOutput(const std::string& path) : path_(path) {
+    std::error_code ec;
+    const auto st = std::filesystem::status(path, ec);
+    if (std::filesystem::is_directory(st)) throw dpts::IoError(path + ": is a directory");
+    if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st)) {
+      device_.open(path, std::ios::binary);
+      if (!device_) throw dpts::IoError(path + ": cannot open for writing");
+    } else {
+      file_.emplace(path);
+    }
+  }
+  // Writes the records: into the file (which commit() puts in place), or to the device at once.
+  void write(const std::vector<dpts::io::PairRecord>& records) {
+    if (file_) return dpts::io::write_pair_records(file_->stream(), records);
+    errno = 0;
+    dpts::io::write_pair_records(device_, records);
+    device_.flush();
+    if (!device_) {
+      const int err = errno;
+      throw dpts::IoError(path_ + ": write failed" +
+                          (err ? std::string(" (") + std::strerror(err) + ")" : std::string()));
+    }
+  }
+  void commit() {
+    if (file_) file_->commit();
+  }
+
+ private:
+  std::string path_;
+  std::optional<dpts::io::AtomicOutputFile> file_;
+  std::ofstream device_;
+};
 
 int run(const Options& o) {
   using namespace dpts;
   if (o.help) {
     std::cout << kHelp;
+    check_stdout();
     return 0;
   }
   if (o.version) {
     std::cout << "dpts-eval " << DPTS_VERSION << "\n";
+    check_stdout();
     return 0;
   }
   const auto start = std::chrono::steady_clock::now();
@@ -157,6 +281,23 @@ int run(const Options& o) {
     }
   }
   core::TriMesh s{std::move(ply.xyz), std::move(ply.faces)};
+  // A triangle soup (an STL made PLY) shares no vertex between faces: weld it, so that the
+  // Steiner graph sees its shared edges. A face whose corners fall together is refused.
+  const std::size_t merged = core::weld_identical_vertices(s);
+  for (std::size_t f = 0; merged > 0 && f < s.faces.size(); ++f) {
+    const auto& v = s.faces[f];
+    if (v[0] == v[1] || v[1] == v[2] || v[2] == v[0]) {
+      throw InputError(o.mesh + ": face " + std::to_string(f) +
+                       " has two corners at the same position");
+    }
+  }
+  // The sample points given, checked before any heavy work.
+  par::EvalOptions eo = o.eval;
+  if (!o.sample_points.empty()) {
+    eo.sample_xy = io::read_sample_points_file(o.sample_points);
+    eo.sets = static_cast<int>(eo.sample_xy.size());
+    eo.points = static_cast<int>(eo.sample_xy[0].size());
+  }
 
   // Validity of T' over the DEM.
   const std::vector<double> s_xy = core::xy_of(s.xyz);
@@ -184,7 +325,6 @@ int run(const Options& o) {
     ++measured;
   }
 
-  par::EvalOptions eo = o.eval;
   eo.snap_m = snap;
   // What the geodesics may use: the limit less what the run holds already, or what is free.
   if (o.max_memory_mb > 0) {
@@ -205,6 +345,7 @@ int run(const Options& o) {
   double last_line = 0;
   int last_tenth = 0;
   const par::StageProgress progress = [&](const std::string& what, double fraction) {
+    if (g_cancel.load(std::memory_order_relaxed) != 0) return false;
     const double elapsed =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (o.quiet || elapsed < 1.0) return true;
@@ -219,8 +360,22 @@ int run(const Options& o) {
     }
     last_line = elapsed;
     last_tenth = tenth;
-    return true;  // note: dpts-eval writes no file, so Ctrl-C may simply end the process
+    return true;
   };
+  // The pairs' file is opened (created beside its path) before the long part: a folder that
+  // does not exist fails now, not after the geodesics.
+  std::optional<PairsOutput> pairs_out;
+  if (!o.pairs_out.empty()) {
+    // note: only while a file is made is Ctrl-C caught (to remove it); otherwise it simply ends
+    // the process, which writes nothing else.
+    struct sigaction sa {};
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, nullptr);
+    sigaction(SIGTERM, &sa, nullptr);
+    pairs_out.emplace(o.pairs_out);
+    eo.keep_pairs = true;
+  }
   par::EvalResult r;
   try {
     r = par::evaluate_distances(t, s, eo, progress);
@@ -230,12 +385,23 @@ int run(const Options& o) {
   const double secs =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double rmse = measured ? std::sqrt(sq / measured) : 0.0;
+  if (pairs_out) {
+    std::vector<io::PairRecord> records;
+    records.reserve(r.pairs.size());
+    for (const auto& p : r.pairs) records.push_back({p.set, p.i, p.j, p.on_t, p.on_s});
+    pairs_out->write(records);
+  }
+  const bool given = !eo.sample_xy.empty();
 
   if (!o.quiet) {
     std::printf("dem              %s: %zu vertices, %zu faces (grid TIN)\n", o.dem.c_str(),
                 t.vertex_count(), t.faces.size());
     std::printf("mesh             %s: %zu vertices, %zu faces\n", o.mesh.c_str(), s.vertex_count(),
                 s.faces.size());
+    if (merged > 0) {
+      std::printf("welded           %zu vertices at the position of an earlier one merged into it\n",
+                  merged);
+    }
     std::printf(
         "validity         %zu faces not counter-clockwise, %zu bad edges, %zu faces over no-data\n",
         mc.clockwise_or_flat, mc.bad_edges, over_nodata);
@@ -243,24 +409,43 @@ int run(const Options& o) {
     std::printf(
         "vertical error   RMSE %.4f m, max %.4f m over %zu cell centres (%zu outside the mesh)\n",
         rmse, vmax, measured, uncovered);
-    std::printf("steiner graphs   delta %.4f m: T %zu nodes (%.2f s), T' %zu nodes (%.2f s)\n",
-                r.delta_m, r.original_nodes, r.original_s, r.simplified_nodes, r.simplified_s);
-    const std::string bound =
-        r.max_searches ? "at most " + std::to_string(r.max_searches) + " searches at once"
-                       : "no bound on searches";
-    std::printf("memory           graphs about %s, a search %s (%s)\n",
-                par::format_bytes(static_cast<double>(r.graphs_bytes)).c_str(),
-                par::format_bytes(static_cast<double>(r.search_bytes)).c_str(), bound.c_str());
-    std::printf(
-        "searched         %.1f %% of T, %.1f %% of T' per query on average (pairs measured one "
-        "way: %zu on T, %zu on T')\n",
-        100 * r.original_searched, 100 * r.simplified_searched, r.original_one_way,
-        r.simplified_one_way);
-    for (std::size_t i = 0; i < r.set_errors.size(); ++i) {
-      std::printf("distance error   set %zu: %.6f\n", i + 1, r.set_errors[i]);
+    if (r.exact) {
+      std::printf(
+          "geodesics        exact (CGAL Surface_mesh_shortest_path): T %.2f s, T' %.2f s\n",
+          r.original_s, r.simplified_s);
+    } else {
+      std::printf("steiner graphs   delta %.4f m: T %zu nodes (%.2f s), T' %zu nodes (%.2f s)\n",
+                  r.delta_m, r.original_nodes, r.original_s, r.simplified_nodes, r.simplified_s);
+      if (eo.straighten) {
+        std::printf("geodesics        Steiner paths straightened: %zu paths (%zu could not be, their "
+                    "Steiner length kept)\n",
+                    r.straightened, r.straighten_failed);
+      } else {
+        std::printf("geodesics        Steiner distances (the paper's; not straightened)\n");
+      }
+      const std::string bound =
+          r.max_searches ? "at most " + std::to_string(r.max_searches) + " searches at once"
+                         : "no bound on searches";
+      std::printf("memory           graphs about %s, a search %s (%s)\n",
+                  par::format_bytes(static_cast<double>(r.graphs_bytes)).c_str(),
+                  par::format_bytes(static_cast<double>(r.search_bytes)).c_str(), bound.c_str());
+      std::printf(
+          "searched         %.1f %% of T, %.1f %% of T' per query on average (pairs measured one "
+          "way: %zu on T, %zu on T')\n",
+          100 * r.original_searched, 100 * r.simplified_searched, r.original_one_way,
+          r.simplified_one_way);
     }
-    std::printf("distance error   %.6f (mean of %d sets of %d points; %zu points snapped)\n",
-                r.distance_error, eo.sets, eo.points, r.snapped);
+    std::printf(
+        "pairs            %zu measured; left out: %zu not connected on T, %zu at distance 0\n",
+        r.pairs_measured, r.pairs_unconnected, r.pairs_coincident);
+    for (std::size_t i = 0; i < r.set_errors.size(); ++i) {
+      // note: given sets keep the numbers of their file (from 0)
+      std::printf("distance error   %sset %zu: %.6f\n", given ? "sample " : "", given ? i : i + 1,
+                  r.set_errors[i]);
+    }
+    std::printf("distance error   %.6f (mean of %d sets of %d points%s; %zu points snapped)\n",
+                r.distance_error, eo.sets, eo.points,
+                given ? (" from " + o.sample_points).c_str() : "", r.snapped);
     std::printf("time             %.2f s\n", secs);
   }
   if (o.json) {
@@ -278,6 +463,14 @@ int run(const Options& o) {
                      .add("points", eo.points)
                      .add("sets", eo.sets)
                      .add("seed", static_cast<unsigned long long>(eo.seed))
+                     .add("sample_points", o.sample_points)
+                     .add("geodesics", r.exact ? "exact" : eo.straighten ? "straightened" : "steiner")
+                     .add("straightened_paths", r.straightened)
+                     .add("straighten_failed", r.straighten_failed)
+                     .add("pairs_measured", r.pairs_measured)
+                     .add("pairs_unconnected_dem", r.pairs_unconnected)
+                     .add("pairs_coincident", r.pairs_coincident)
+                     .add("merged_vertices", merged)
                      .add("delta_m", r.delta_m)
                      .add("steiner_nodes_dem", r.original_nodes)
                      .add("steiner_nodes_mesh", r.simplified_nodes)
@@ -303,6 +496,9 @@ int run(const Options& o) {
                      .str()
               << "\n";
   }
+  // note: stdout first: a run whose report cannot be written fails, and leaves no pairs file.
+  check_stdout();
+  if (pairs_out) pairs_out->commit();
   return 0;
 }
 
@@ -317,6 +513,9 @@ int main(int argc, char** argv) {
   } catch (const dpts::UsageError& e) {
     std::cerr << "dpts-eval: " << e.what() << "\nTry 'dpts-eval --help' for more information.\n";
     return 2;
+  } catch (const dpts::Cancelled&) {
+    std::cerr << "dpts-eval: interrupted; no output written\n";
+    return 1;
 
   } catch (const std::exception& e) {
     std::cerr << "dpts-eval: error: " << e.what() << "\n";

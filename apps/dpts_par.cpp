@@ -36,12 +36,6 @@ extern "C" void on_signal(int) {
   g_cancel.store(1, std::memory_order_relaxed);
 }
 
-bool same_file(const std::string& a, const std::string& b) {
-  std::error_code ec;
-  if (std::filesystem::exists(b, ec) && std::filesystem::equivalent(a, b, ec)) return true;
-  return std::filesystem::weakly_canonical(a, ec) == std::filesystem::weakly_canonical(b, ec);
-}
-
 dpts::io::DemReadOptions read_options(const dpts::cli::ParOptions& o) {
   dpts::io::DemReadOptions r;
   r.t_srs = o.t_srs;
@@ -295,7 +289,7 @@ int run(const dpts::cli::ParOptions& o) {
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
                                   static_cast<std::size_t>(threads));
   for (const auto& [key, value] : o.config) CPLSetConfigOption(key.c_str(), value.c_str());
-  if (same_file(o.input, o.output)) {
+  if (dpts::cli::same_file(o.input, o.output)) {
     throw UsageError(o.output + ": OUTPUT is the INPUT file; refusing to overwrite it");
   }
   const auto start = std::chrono::steady_clock::now();

@@ -2,8 +2,10 @@
 #include "core/mesh_check.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <utility>
+#include <vector>
 
 namespace dpts::core {
 
@@ -93,6 +95,43 @@ std::size_t faces_over_nodata(const HeightGrid& grid, const std::vector<double>&
     if (over) ++bad;
   }
   return bad;
+}
+
+std::size_t weld_identical_vertices(TriMesh& mesh) {
+  const std::size_t n = mesh.vertex_count();
+  auto at = [&](std::uint32_t v) {
+    return std::array<double, 3>{mesh.xyz[3 * v], mesh.xyz[3 * v + 1], mesh.xyz[3 * v + 2]};
+  };
+  // Sort by position, then index: each run of equal positions starts with its first vertex.
+  std::vector<std::uint32_t> order(n);
+  for (std::uint32_t v = 0; v < n; ++v) order[v] = v;
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    const auto pa = at(a), pb = at(b);
+    return pa != pb ? pa < pb : a < b;
+  });
+  std::vector<std::uint32_t> first(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    first[order[k]] = k > 0 && at(order[k]) == at(order[k - 1]) ? first[order[k - 1]] : order[k];
+  }
+  // Keep the first of each position, in index order; the others take its new index.
+  std::vector<std::uint32_t> index(n);
+  std::vector<double> xyz;
+  xyz.reserve(mesh.xyz.size());
+  std::uint32_t kept = 0;
+  for (std::uint32_t v = 0; v < n; ++v) {
+    if (first[v] == v) {
+      index[v] = kept++;
+      xyz.insert(xyz.end(), mesh.xyz.begin() + 3 * v, mesh.xyz.begin() + 3 * v + 3);
+    } else {
+      index[v] = index[first[v]];  // note: first[v] < v, so its index is already set
+    }
+  }
+  if (kept == n) return 0;
+  for (auto& f : mesh.faces) {
+    for (auto& v : f) v = index[v];
+  }
+  mesh.xyz = std::move(xyz);
+  return n - kept;
 }
 
 }  // namespace dpts::core

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/grid.hpp"
+#include "core/steiner_graph.hpp"
 
 namespace dpts::core {
 
@@ -37,5 +38,12 @@ std::vector<double> xy_of(const std::vector<double>& xyz);
 std::size_t faces_over_nodata(const HeightGrid& grid, const std::vector<double>& grid_xy,
                               const std::vector<std::array<std::uint32_t, 3>>& faces,
                               double tolerance = 1e-6);
+
+// Welds a triangle soup (each face with its own corners, as an STL converted to PLY): vertices
+// with identical x, y and z become one, the first of them in index order, and faces index it;
+// the vertices kept stay in their order. Returns the number of vertices merged away (0 when
+// none share a position). A face whose corners fall together becomes one that repeats a
+// vertex: the caller checks. Deterministic; O(n log n).
+std::size_t weld_identical_vertices(TriMesh& mesh);
 
 }  // namespace dpts::core

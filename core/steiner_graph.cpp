@@ -214,7 +214,7 @@ void SteinerGraph::face_nodes(std::uint32_t f, std::vector<std::uint32_t>& out) 
 void LabelHeap::reset(std::size_t nodes) {
   heap_.clear();
   finished_ = false;
-  label_.assign(nodes, {std::numeric_limits<double>::infinity(), 0});
+  label_.assign(nodes, {std::numeric_limits<double>::infinity(), 0, kNone});
 }
 
 void LabelHeap::sift_up(std::size_t i, Entry e) {
@@ -229,9 +229,11 @@ void LabelHeap::sift_up(std::size_t i, Entry e) {
   label_[e.node].slot = static_cast<std::uint32_t>(i + 1);
 }
 
-void LabelHeap::decrease(std::uint32_t node, double key, std::uint32_t tag) {
+void LabelHeap::decrease(std::uint32_t node, double key, std::uint32_t tag,
+                         std::uint32_t pred) {
   Label& l = label_[node];
   l.dist = key;
+  l.pred = pred;
   if (l.slot == 0) {
     heap_.push_back({key, node, tag});
     sift_up(heap_.size() - 1, {key, node, tag});
@@ -297,7 +299,7 @@ BucketQueue::BucketQueue(const SteinerGraph& graph)
 
 void BucketQueue::reset(std::size_t nodes) {
   for (auto& b : ring_) b.clear();
-  label_.assign(nodes, {std::numeric_limits<double>::infinity(), 0});
+  label_.assign(nodes, {std::numeric_limits<double>::infinity(), 0, LabelHeap::kNone});
   bucket_ = 0;
   next_ = 0;
   queued_ = 0;
@@ -340,11 +342,12 @@ std::size_t GeodesicQuery::estimate_bytes(std::size_t nodes, std::size_t faces,
 }
 
 void GeodesicQuery::distances(const SurfacePoint& source, const std::vector<SurfacePoint>& targets,
-                              std::vector<double>& out) {
+                              std::vector<double>& out, std::size_t required) {
   out.assign(targets.size(), std::numeric_limits<double>::infinity());
-  if (targets.empty()) return;
+  required = std::min(required, targets.size());
+  if (required == 0) return;
   const double inf = std::numeric_limits<double>::infinity();
-  search(source, targets, inf, inf, nullptr, out);
+  search(source, targets, inf, inf, nullptr, out, required);
 }
 
 void GeodesicQuery::explore(const SurfacePoint& source, const std::vector<SurfacePoint>& targets,
@@ -353,17 +356,17 @@ void GeodesicQuery::explore(const SurfacePoint& source, const std::vector<Surfac
                             std::vector<double>& out) {
   shell.clear();
   out.assign(targets.size(), std::numeric_limits<double>::infinity());
-  search(source, targets, radius, shell_from, &shell, out);
+  search(source, targets, radius, shell_from, &shell, out, targets.size());
 }
 
 void GeodesicQuery::search(const SurfacePoint& source, const std::vector<SurfacePoint>& targets,
                            double radius, double shell_from,
                            std::vector<std::pair<std::uint32_t, double>>* shell,
-                           std::vector<double>& out) {
+                           std::vector<double>& out, std::size_t required) {
   if (buckets_) {
-    run(*buckets_, source, targets, radius, shell_from, shell, out);
+    run(*buckets_, source, targets, radius, shell_from, shell, out, required);
   } else {
-    run(heap_, source, targets, radius, shell_from, shell, out);
+    run(heap_, source, targets, radius, shell_from, shell, out, required);
   }
 }
 
@@ -371,7 +374,7 @@ template <typename Queue>
 void GeodesicQuery::run(Queue& queue, const SurfacePoint& source,
                         const std::vector<SurfacePoint>& targets, double radius, double shell_from,
                         std::vector<std::pair<std::uint32_t, double>>* shell,
-                        std::vector<double>& out) {
+                        std::vector<double>& out, std::size_t required) {
   const double inf = std::numeric_limits<double>::infinity();
   const std::size_t n = g_.node_count();
   // Targets are extra nodes n + j, reached from their face's boundary nodes.
@@ -388,7 +391,8 @@ void GeodesicQuery::run(Queue& queue, const SurfacePoint& source,
   // Relaxes from a point p at distance d into face f: its boundary nodes and its targets.
   // note: a node improves only if |p v| < dist(v) - d; comparing squares first skips the
   // square root for the many relaxations that cannot improve (settled or nearer nodes).
-  auto relax = [&](std::uint32_t v, const double* p, const double* q, double d, std::uint32_t via) {
+  auto relax = [&](std::uint32_t v, const double* p, const double* q, double d, std::uint32_t via,
+                   std::uint32_t from) {
     const double old = queue.dist(v);
     const double gap = old - d;
     if (!(gap > 0)) return;
@@ -398,23 +402,21 @@ void GeodesicQuery::run(Queue& queue, const SurfacePoint& source,
     const double nd = d + std::sqrt(w2);
     if (nd < old) {
       if (old == inf && v < n) g_.prefetch(v);
-      queue.decrease(v, nd, via);
+      queue.decrease(v, nd, via, from);
     }
   };
-  auto relax_targets = [&](std::uint32_t f, const double* p, double d) {
+  auto relax_targets = [&](std::uint32_t f, const double* p, double d, std::uint32_t from) {
     if (!(target_faces_[f >> 6] >> (f & 63) & 1)) return;
     for (std::int32_t j = face_target_head_[f]; j >= 0; j = target_next_[j]) {
       const double q[3] = {targets[j].x, targets[j].y, targets[j].z};
-      relax(static_cast<std::uint32_t>(n + j), p, q, d, SteinerGraph::kAnywhere);
+      relax(static_cast<std::uint32_t>(n + j), p, q, d, SteinerGraph::kAnywhere, from);
     }
   };
-  auto relax_face = [&](std::uint32_t f, const double* p, double d) {
-    g_.face_nodes(f, nodes_);
-    for (std::uint32_t v : nodes_) relax(v, p, g_.position(v), d, f);
-    relax_targets(f, p, d);
-  };
-  relax_face(source.face, src, 0.0);
-  std::size_t remaining = targets.size();
+  // The source's face: its boundary nodes and targets, from the source point itself.
+  g_.face_nodes(source.face, nodes_);
+  for (std::uint32_t v : nodes_) relax(v, src, g_.position(v), 0.0, source.face, LabelHeap::kNone);
+  relax_targets(source.face, src, 0.0, LabelHeap::kNone);
+  std::size_t remaining = required;
   LabelHeap::Entry top;
   settled_ = 0;
   while (queue.pop(top)) {
@@ -426,7 +428,7 @@ void GeodesicQuery::run(Queue& queue, const SurfacePoint& source,
       queue.reopen(u);
       if (!target_done_[u - n]) {
         target_done_[u - n] = 1;
-        if (--remaining == 0) queue.finish();
+        if (u - n < required && --remaining == 0) queue.finish();
       }
       continue;
     }
@@ -447,14 +449,27 @@ void GeodesicQuery::run(Queue& queue, const SurfacePoint& source,
     const double* p = g_.position(u);
     g_.for_each_neighbour(
         u, top.tag,
-        [&](std::uint32_t v, std::uint32_t via) { relax(v, p, g_.position(v), d, via); },
-        [&](std::uint32_t f) { relax_targets(f, p, d); });
+        [&](std::uint32_t v, std::uint32_t via) { relax(v, p, g_.position(v), d, via, u); },
+        [&](std::uint32_t f) { relax_targets(f, p, d, u); });
   }
   // note: a target not settled (search bounded by a radius, or unreachable) stays at infinity.
   for (std::size_t j = 0; j < targets.size(); ++j) {
     if (target_done_[j]) out[j] = std::fabs(queue.dist(static_cast<std::uint32_t>(n + j)));
   }
   for (const auto& t : targets) face_target_head_[t.face] = -1;
+}
+
+void GeodesicQuery::path(std::size_t target, std::vector<std::uint32_t>& nodes) const {
+  nodes.clear();
+  const std::uint32_t first = pred(static_cast<std::uint32_t>(g_.node_count() + target));
+  if (first != LabelHeap::kNone) path_to_node(first, nodes);
+}
+
+void GeodesicQuery::path_to_node(std::uint32_t node, std::vector<std::uint32_t>& nodes) const {
+  nodes.clear();
+  // note: a settled node's predecessor was settled before it, so the chain ends at the source.
+  for (std::uint32_t v = node; v != LabelHeap::kNone; v = pred(v)) nodes.push_back(v);
+  std::reverse(nodes.begin(), nodes.end());
 }
 
 }  // namespace dpts::core

@@ -78,6 +78,23 @@ class SteinerGraph {
   // The nodes on face f's boundary (its corners and its edges' Steiner points), into out.
   void face_nodes(std::uint32_t f, std::vector<std::uint32_t>& out) const;
 
+  // Topology, for following a path through the faces (see geodesic_path.hpp).
+  // The face across face f's edge i (from corner i to corner i + 1), kNoFace on the outline.
+  std::uint32_t across(std::uint32_t f, int i) const {
+    const Edge& e = edges_[face_edges_[f][i]];
+    return e.sides[0].face == f ? e.sides[1].face : e.sides[0].face;
+  }
+  // The mesh vertices a Steiner node's edge joins; for a vertex node, {node, node}.
+  std::array<std::uint32_t, 2> node_edge_ends(std::uint32_t node) const {
+    if (node < mesh_.vertex_count()) return {node, node};
+    return edges_[nodes_[node].edge].ends;
+  }
+  // Calls fn(f) for each face around vertex v (in no particular order).
+  template <typename Fn>
+  void for_each_face_of_vertex(std::uint32_t v, Fn&& fn) const {
+    for (std::uint32_t k = corner_first_[v]; k < corner_first_[v + 1]; ++k) fn(corners_[k].face);
+  }
+
   // Where a node's distance label came from (Dijkstra records it with the label): a face id,
   // the node's own edge, or anywhere.
   static constexpr std::uint32_t kAlongEdge = 0xFFFFFFFEu;
@@ -183,8 +200,11 @@ class LabelHeap {
     const Label& l = label_[node];
     return l.slot == 0 ? l.dist : std::numeric_limits<double>::infinity();
   }
-  // Lowers node's distance to key (which must be smaller), inserting it if not in the heap.
-  void decrease(std::uint32_t node, double key, std::uint32_t tag);
+  // Lowers node's distance to key (which must be smaller), inserting it if not in the heap;
+  // pred: the node it was reached from (kNone: the source point).
+  void decrease(std::uint32_t node, double key, std::uint32_t tag, std::uint32_t pred);
+  // The node a node's distance came from (kNone: the source point); valid once it is reached.
+  std::uint32_t pred(std::uint32_t node) const { return label_[node].pred; }
   // The entry of least key into out (its node keeps its distance); false when none is left.
   bool pop(Entry& out);
   // The node most likely popped after `ahead` others (kNone: none known).
@@ -202,6 +222,7 @@ class LabelHeap {
   struct Label {
     double dist;
     std::uint32_t slot;  // heap index + 1, 0: not in the heap
+    std::uint32_t pred;  // the node its distance came from
   };
   void sift_up(std::size_t i, Entry e);
   std::vector<Entry> heap_;
@@ -228,7 +249,7 @@ class BucketQueue {
     const double l = label_[node].dist;
     return std::signbit(l) ? -l : std::numeric_limits<double>::infinity();
   }
-  void decrease(std::uint32_t node, double key, std::uint32_t tag) {
+  void decrease(std::uint32_t node, double key, std::uint32_t tag, std::uint32_t pred) {
     Label& l = label_[node];
     // note: b >= bucket_ (a distance never falls below the bucket being emptied: its nodes are
     // at least one width from the others) but for rounding, which the max guards against; and
@@ -239,6 +260,7 @@ class BucketQueue {
     const bool queued = l.dist < std::numeric_limits<double>::infinity() && bucket_of(l.dist) == b;
     l.dist = key;
     l.tag = tag;
+    l.pred = pred;
     if (queued) return;
     ring_[b & mask_].push_back(node);
     ++queued_;
@@ -251,6 +273,7 @@ class BucketQueue {
     return next_ + ahead < b.size() ? b[next_ + ahead] : LabelHeap::kNone;
   }
   void prefetch_label(std::uint32_t node) const { __builtin_prefetch(&label_[node]); }
+  std::uint32_t pred(std::uint32_t node) const { return label_[node].pred; }
   // Lets a popped node be lowered again: a target, whose last segment may be shorter than the
   // width, by a later node of the same bucket.
   void reopen(std::uint32_t node) { label_[node].dist = std::fabs(label_[node].dist); }
@@ -264,6 +287,7 @@ class BucketQueue {
   struct Label {
     double dist;
     std::uint32_t tag;
+    std::uint32_t pred;  // the node its distance came from (fills the label's padding)
   };
   // The bucket a distance goes into: never one already emptied.
   std::uint64_t bucket_of(double key) const {
@@ -294,9 +318,11 @@ class GeodesicQuery {
 
   // Distances from source to each target: min over boundary nodes u of the source's face and
   // v of the target's face of |source u| + path(u, v) + |v target| (and the straight segment
-  // when both lie in one face). Stops as soon as every target is settled.
+  // when both lie in one face). Stops as soon as the first `required` targets (all by default)
+  // are settled; a later target not settled by then stays at infinity.
   void distances(const SurfacePoint& source, const std::vector<SurfacePoint>& targets,
-                 std::vector<double>& out);
+                 std::vector<double>& out, std::size_t required = kAllTargets);
+  static constexpr std::size_t kAllTargets = ~std::size_t{0};
 
   // A search bounded by a radius: settles every node within `radius` of source (at least;
   // fewer when all targets are settled first). Into out: each settled target's distance, else
@@ -311,6 +337,19 @@ class GeodesicQuery {
     return buckets_ ? buckets_->settled_dist(node) : heap_.settled_dist(node);
   }
 
+  // The graph nodes of the shortest Steiner path the last query found from its source to its
+  // target j (settled), in order from the source, into nodes: the source reaches the first
+  // through its own face, each node the next through a face both lie on (or along an edge),
+  // and the last the target through the target's face. Empty when the straight segment of one
+  // face was shortest.
+  void path(std::size_t target, std::vector<std::uint32_t>& nodes) const;
+  // The node a graph node's distance came from in the last query (LabelHeap::kNone: the source).
+  std::uint32_t pred(std::uint32_t node) const {
+    return buckets_ ? buckets_->pred(node) : heap_.pred(node);
+  }
+  // The same for a graph node the last query settled: the path's nodes, `node` last.
+  void path_to_node(std::uint32_t node, std::vector<std::uint32_t>& nodes) const;
+
   // Graph nodes the last query settled (the area it searched).
   std::size_t settled() const { return settled_; }
 
@@ -321,11 +360,11 @@ class GeodesicQuery {
   // explore(), or distances() with an infinite radius and no shell, on the graph's queue.
   void search(const SurfacePoint& source, const std::vector<SurfacePoint>& targets, double radius,
               double shell_from, std::vector<std::pair<std::uint32_t, double>>* shell,
-              std::vector<double>& out);
+              std::vector<double>& out, std::size_t required);
   template <typename Queue>
   void run(Queue& queue, const SurfacePoint& source, const std::vector<SurfacePoint>& targets,
            double radius, double shell_from, std::vector<std::pair<std::uint32_t, double>>* shell,
-           std::vector<double>& out);
+           std::vector<double>& out, std::size_t required);
   const SteinerGraph& g_;
   LabelHeap heap_;
   std::unique_ptr<BucketQueue> buckets_;

@@ -15,16 +15,43 @@ double cross2(const double* a, const double* b, const double* c) {
   return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
 }
 
-// Barycentric lift of (x, y) onto face f.
+// Barycentric lift of (x, y) onto face f. note: relative to the first corner, so that large
+// (UTM) coordinates cost no precision in the differences.
 SurfacePoint lift(const TriMesh& m, std::uint32_t f, double x, double y) {
   const double* a = &m.xyz[3 * m.faces[f][0]];
   const double* b = &m.xyz[3 * m.faces[f][1]];
   const double* c = &m.xyz[3 * m.faces[f][2]];
-  const double p[2] = {x, y};
-  const double area = cross2(a, b, c);
-  const double la = cross2(b, c, p) / area, lb = cross2(c, a, p) / area;
-  const double lc = 1.0 - la - lb;
-  return {x, y, la * a[2] + lb * b[2] + lc * c[2], f};
+  const double bx = b[0] - a[0], by = b[1] - a[1], cx = c[0] - a[0], cy = c[1] - a[1];
+  const double px = x - a[0], py = y - a[1];
+  const double area = bx * cy - by * cx;
+  const double lb = (px * cy - py * cx) / area, lc = (bx * py - by * px) / area;
+  return {x, y, a[2] + lb * (b[2] - a[2]) + lc * (c[2] - a[2]), f};
+}
+
+// Whether (x, y) lies in face f, its edges included: each edge's orientation test computed
+// relative to the first corner, with a tolerance for the rounding of the coordinates themselves
+// (a point given on an edge is off it by up to half an ulp of its coordinates: 1e-9 m at 5e6 m)
+// and of the arithmetic. note: a face flat in x, y (area within that tolerance) contains
+// nothing: its points lie on its neighbours, and it cannot lift them.
+enum class Inside { no, yes, degenerate };
+Inside contains(const TriMesh& m, std::uint32_t f, double x, double y) {
+  const double* a = &m.xyz[3 * m.faces[f][0]];
+  const double* b = &m.xyz[3 * m.faces[f][1]];
+  const double* c = &m.xyz[3 * m.faces[f][2]];
+  const double bx = b[0] - a[0], by = b[1] - a[1], cx = c[0] - a[0], cy = c[1] - a[1];
+  const double px = x - a[0], py = y - a[1];
+  const double area = bx * cy - by * cx;
+  constexpr double kEps = std::numeric_limits<double>::epsilon();
+  const double magnitude = std::max({std::fabs(a[0]), std::fabs(a[1]), std::fabs(x), std::fabs(y)});
+  const double size = std::max({std::fabs(bx), std::fabs(by), std::fabs(cx), std::fabs(cy)});
+  if (!(std::fabs(area) > 8.0 * kEps * size * (magnitude + size))) return Inside::degenerate;
+  const double extent = std::max({size, std::fabs(px), std::fabs(py)});
+  const double tol = 8.0 * kEps * extent * (magnitude + extent);
+  const double sign = area > 0 ? 1.0 : -1.0;
+  const double ab = sign * (bx * py - by * px);                      // edge a-b
+  const double bc = sign * ((cx - bx) * (py - by) - (cy - by) * (px - bx));  // edge b-c
+  const double ca = sign * (px * cy - py * cx);                      // edge c-a
+  return ab >= -tol && bc >= -tol && ca >= -tol ? Inside::yes : Inside::no;
 }
 
 // The point of segment a-b nearest to p in x, y, into q; returns its squared distance.
@@ -127,6 +154,9 @@ PointLocator::PointLocator(const TriMesh& mesh) : mesh_(mesh) {
                     std::numeric_limits<double>::min()});
   nx_ = std::max(1, static_cast<int>(std::ceil((x1 - x0_) / cell_)) + 1);
   ny_ = std::max(1, static_cast<int>(std::ceil((y1 - y0_) / cell_)) + 1);
+  const double pad = 16 * std::numeric_limits<double>::epsilon() *
+                    (std::max({std::fabs(x0_), std::fabs(x1), std::fabs(y0_), std::fabs(y1)}) +
+                     std::max(w, h));
   std::vector<std::pair<std::uint32_t, std::uint32_t>> entries;  // (bucket, face)
   for (std::uint32_t f = 0; f < mesh.faces.size(); ++f) {
     double fx0 = 1e300, fx1 = -1e300, fy0 = 1e300, fy1 = -1e300;
@@ -134,10 +164,12 @@ PointLocator::PointLocator(const TriMesh& mesh) : mesh_(mesh) {
       fx0 = std::min(fx0, mesh.xyz[3 * v]), fx1 = std::max(fx1, mesh.xyz[3 * v]);
       fy0 = std::min(fy0, mesh.xyz[3 * v + 1]), fy1 = std::max(fy1, mesh.xyz[3 * v + 1]);
     }
-    const int i0 = static_cast<int>((fx0 - x0_) / cell_),
-              i1 = static_cast<int>((fx1 - x0_) / cell_);
-    const int j0 = static_cast<int>((fy0 - y0_) / cell_),
-              j1 = static_cast<int>((fy1 - y0_) / cell_);
+    // note: padded by the edge tolerance of contains(), so that a point it finds on an edge
+    // (up to rounding, maybe a hair outside the box) is in one of the face's buckets.
+    const int i0 = std::max(0, static_cast<int>((fx0 - pad - x0_) / cell_)),
+              i1 = std::min(nx_ - 1, static_cast<int>((fx1 + pad - x0_) / cell_));
+    const int j0 = std::max(0, static_cast<int>((fy0 - pad - y0_) / cell_)),
+              j1 = std::min(ny_ - 1, static_cast<int>((fy1 + pad - y0_) / cell_));
     for (int j = j0; j <= j1; ++j) {
       for (int i = i0; i <= i1; ++i)
         entries.emplace_back(static_cast<std::uint32_t>(j * nx_ + i), f);
@@ -168,17 +200,13 @@ std::optional<PointLocator::Hit> PointLocator::locate(double x, double y, double
       const std::size_t b = static_cast<std::size_t>(j) * nx_ + i;
       for (std::uint32_t k = first_[b]; k < first_[b + 1]; ++k) {
         const std::uint32_t f = faces_[k];
-        const double* a = &mesh_.xyz[3 * mesh_.faces[f][0]];
-        const double* bb = &mesh_.xyz[3 * mesh_.faces[f][1]];
-        const double* c = &mesh_.xyz[3 * mesh_.faces[f][2]];
-        const double area = cross2(a, bb, c);
-        const double tol = -1e-12 * std::fabs(area);
-        if (i == ci && j == cj && cross2(a, bb, p) * (area > 0 ? 1 : -1) >= tol &&
-            cross2(bb, c, p) * (area > 0 ? 1 : -1) >= tol &&
-            cross2(c, a, p) * (area > 0 ? 1 : -1) >= tol) {
-          return Hit{lift(mesh_, f, x, y), false};
-        }
+        const Inside in = contains(mesh_, f, x, y);
+        if (in == Inside::degenerate) continue;
+        if (i == ci && j == cj && in == Inside::yes) return Hit{lift(mesh_, f, x, y), false};
         if (snap > 0) {
+          const double* a = &mesh_.xyz[3 * mesh_.faces[f][0]];
+          const double* bb = &mesh_.xyz[3 * mesh_.faces[f][1]];
+          const double* c = &mesh_.xyz[3 * mesh_.faces[f][2]];
           double q[2];
           const double d2 =
               std::min({closest_on_segment(p, a, bb, q), closest_on_segment(p, bb, c, q),

@@ -12,12 +12,16 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
 #include "core/errors.hpp"
+#include "core/geodesic_path.hpp"
+#include "core/exact_geodesic.hpp"
 #include "core/surface_sampling.hpp"
+#include "parallel/exact_pairwise.hpp"
 #include "parallel/meta.hpp"
 
 namespace dpts::par {
@@ -35,11 +39,12 @@ double straight2(const std::vector<core::SurfacePoint>& points, std::size_t i, s
 
 // Measures the pairs i < j with need[i * K + j] into out[i * K + j]: each pair by a Dijkstra
 // from the endpoint that ranks the other nearer (straight-line distance), so that every query
-// stops at about its nearest half of the points instead of the farthest. Adds the settled
-// nodes to `settled`; calls searched (if given) as each source is done.
+// stops at about its nearest half of the points instead of the farthest; with `straighten`,
+// each pair's path is then pulled taut (the shorter length kept). Adds what the queries did to
+// `stats`; calls searched (if given) as each source is done.
 void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::SurfacePoint>& points,
-                     const std::vector<char>& need, std::vector<double>& out, double& settled,
-                     const std::function<void()>& searched) {
+                     const std::vector<char>& need, bool straighten, std::vector<double>& out,
+                     PairwiseStats& stats, const std::function<void()>& searched) {
   const std::size_t k = points.size();
   auto d2 = [&](std::size_t i, std::size_t j) { return straight2(points, i, j); };
   std::vector<std::vector<std::size_t>> rank(k, std::vector<std::size_t>(k, 0));
@@ -65,13 +70,30 @@ void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::Su
       }
     }
   }
-  std::vector<std::size_t> settled_by(k, 0);  // per source: the same sum for any thread count
-  tbb::enumerable_thread_specific<std::unique_ptr<core::GeodesicQuery>> queries;
+  // note: two searches, each straightened, rank the routes of a pair independently; where the
+  // graph's error put one on the longer of two nearly equal routes, the other mostly is not.
+  // So with `straighten`, a source also measures the pairs assigned to the other end that its
+  // search settles anyway (into reverse[i * K + j]), and each pair takes the shorter.
+  std::vector<std::vector<std::size_t>> rides(k);
+  for (std::size_t i = 0; i < k; ++i) {
+    for (std::size_t j : assigned[i]) rides[j].push_back(i);
+  }
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<double> reverse(straighten ? k * k : 0, inf);
+  // Per source: the same sums for any thread count.
+  std::vector<std::size_t> settled_by(k, 0);
+  std::vector<core::PathStraightener::Stats> straightened_by(k);
+  struct Scratch {
+    core::GeodesicQuery query;
+    core::PathStraightener straightener;
+    explicit Scratch(const core::SteinerGraph& g) : query(g), straightener(g) {}
+  };
+  tbb::enumerable_thread_specific<std::unique_ptr<Scratch>> scratch;
   // note: grain 1: query costs differ a lot; let the scheduler balance them.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, k, 1),
                     [&](const tbb::blocked_range<std::size_t>& r) {
-                      auto& q = queries.local();
-                      if (!q) q = std::make_unique<core::GeodesicQuery>(graph);
+                      auto& sc = scratch.local();
+                      if (!sc) sc = std::make_unique<Scratch>(graph);
                       std::vector<core::SurfacePoint> targets;
                       std::vector<double> d;
                       for (std::size_t i = r.begin(); i < r.end(); ++i) {
@@ -79,18 +101,51 @@ void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::Su
                           if (searched) searched();
                           continue;
                         }
+                        // The other needed pairs of i ride along: those the search settles
+                        // before its own are done get a second path, from this side.
                         targets.clear();
                         for (std::size_t j : assigned[i]) targets.push_back(points[j]);
-                        q->distances(points[i], targets, d);
-                        settled_by[i] = q->settled();
-                        for (std::size_t t = 0; t < assigned[i].size(); ++t) {
-                          const std::size_t j = assigned[i][t];
-                          out[std::min(i, j) * k + std::max(i, j)] = d[t];
+                        const std::size_t own = targets.size();
+                        if (straighten) {
+                          for (std::size_t j : rides[i]) targets.push_back(points[j]);
                         }
+                        sc->query.distances(points[i], targets, d, own);
+                        settled_by[i] = sc->query.settled();
+                        const auto before = sc->straightener.stats();
+                        for (std::size_t t = 0; t < targets.size(); ++t) {
+                          if (straighten) {
+                            d[t] = sc->straightener.shortest(sc->query, points[i], t, targets[t], d[t]);
+                          }
+                          if (t < own) {
+                            const std::size_t j = assigned[i][t];
+                            out[std::min(i, j) * k + std::max(i, j)] = d[t];
+                          } else {
+                            reverse[i * k + rides[i][t - own]] = d[t];
+                          }
+                        }
+                        const auto& after = sc->straightener.stats();
+                        straightened_by[i] = {after.paths - before.paths,
+                                              after.passes - before.passes,
+                                              after.reroutes - before.reroutes,
+                                              after.failed - before.failed};
                         if (searched) searched();
                       }
                     });
-  for (std::size_t n : settled_by) settled += static_cast<double>(n);
+  if (straighten) {
+    for (std::size_t i = 0; i < k; ++i) {
+      for (std::size_t j : rides[i]) {
+        double& v = out[std::min(i, j) * k + std::max(i, j)];
+        v = std::min(v, reverse[i * k + j]);
+      }
+    }
+  }
+  for (std::size_t i = 0; i < k; ++i) {
+    stats.settled += static_cast<double>(settled_by[i]);
+    stats.straightened += straightened_by[i].paths;
+    stats.straighten_passes += straightened_by[i].passes;
+    stats.reroutes += straightened_by[i].reroutes;
+    stats.straighten_failed += straightened_by[i].failed;
+  }
 }
 
 // Search radii for meeting in the middle: R_i + R_j >= c_ij for every pair, with the sum of
@@ -125,16 +180,17 @@ std::size_t unbounded_searches(std::size_t threads) { return (1 + kKeptPerWorker
 // searched (if given) is called as each source's search is done.
 std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
                                       const std::vector<core::SurfacePoint>& points,
-                                      PairwiseMethod method, PairwiseStats& stats,
+                                      const PairwiseOptions& options, PairwiseStats& stats,
                                       std::size_t max_kept, const std::function<void()>& searched) {
+  const PairwiseMethod method = options.method;
   const std::size_t k = points.size();
   std::vector<double> out(k * k, 0.0);
   std::vector<char> need(k * k, 0);
   for (std::size_t i = 0; i < k; ++i) {
     for (std::size_t j = i + 1; j < k; ++j) need[i * k + j] = 1;
   }
-  if (method == PairwiseMethod::kOneWay || k < 3) {
-    measure_one_way(graph, points, need, out, stats.settled, searched);
+  if (options.straighten || method == PairwiseMethod::kOneWay || k < 3) {
+    measure_one_way(graph, points, need, options.straighten, out, stats, searched);
     stats.one_way_pairs += k * (k - 1) / 2;
     return out;
   }
@@ -310,7 +366,7 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
   for (std::size_t n : settled_by) stats.settled += static_cast<double>(n);
   kept.clear();  // the one-way queries below take their memory
   pool.clear();
-  if (left_count > 0) measure_one_way(graph, points, left, out, stats.settled, nullptr);
+  if (left_count > 0) measure_one_way(graph, points, left, false, out, stats, nullptr);
   stats.one_way_pairs += left_count;
   return out;
 }
@@ -320,7 +376,8 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
 std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
                                        const std::vector<core::SurfacePoint>& points,
                                        const PairwiseOptions& options, PairwiseStats* stats) {
-  const PairwiseMethod method = options.method;
+  const PairwiseMethod method =
+      options.straighten ? PairwiseMethod::kOneWay : options.method;  // paths need one way
   const std::size_t max_searches = options.max_searches;
   const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
   std::size_t workers = threads, max_kept = kKeptPerWorker * threads;
@@ -350,10 +407,10 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
   }
   PairwiseStats local;
   PairwiseStats& st = stats ? *stats : local;
-  if (workers == threads) return pairwise_in_arena(graph, points, method, st, max_kept, searched);
+  if (workers == threads) return pairwise_in_arena(graph, points, options, st, max_kept, searched);
   tbb::task_arena arena(static_cast<int>(workers));
   return arena.execute(
-      [&] { return pairwise_in_arena(graph, points, method, st, max_kept, searched); });
+      [&] { return pairwise_in_arena(graph, points, options, st, max_kept, searched); });
 }
 
 EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh& simplified,
@@ -362,62 +419,126 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
     if (progress && !progress(what, 0.0)) throw Cancelled();
   };
   EvalResult result;
-  result.delta_m = options.delta_m > 0 ? options.delta_m
-                                       : kDefaultDeltaFactor * core::mean_edge_length(original);
-  const auto k = static_cast<std::size_t>(options.points);
-  // Memory: both graphs, and as many searches on T (the larger graph) as the budget holds.
-  const auto est_t = core::SteinerGraph::estimate(original, result.delta_m);
-  const auto est_s = core::SteinerGraph::estimate(simplified, result.delta_m);
-  result.graphs_bytes = est_t.bytes + est_s.bytes;
-  result.search_bytes = core::GeodesicQuery::estimate_bytes(
-      std::max(est_t.nodes, est_s.nodes), std::max(original.faces.size(), simplified.faces.size()),
-      k);
-  if (options.memory_budget_bytes > 0) {
-    const std::size_t need =
-        result.graphs_bytes + min_searches(options.method) * result.search_bytes;
-    if (need > options.memory_budget_bytes) {
-      throw InputError(
-          "the geodesics need about " + format_bytes(static_cast<double>(need)) +
-          " (Steiner graphs " + format_bytes(static_cast<double>(result.graphs_bytes)) + ", " +
-          std::to_string(min_searches(options.method)) + " searches of " +
-          format_bytes(static_cast<double>(result.search_bytes)) + "), more than the " +
-          format_bytes(static_cast<double>(options.memory_budget_bytes)) +
-          " available (--max-memory); use a larger --delta");
+  result.exact = options.exact;
+  // note: straightening needs each pair's path, so it measures one way.
+  const PairwiseMethod method = options.straighten ? PairwiseMethod::kOneWay : options.method;
+  const bool given = !options.sample_xy.empty();
+  const std::size_t sets = given ? options.sample_xy.size() : static_cast<std::size_t>(options.sets);
+  std::size_t k_max = given ? 0 : static_cast<std::size_t>(options.points);
+  for (const auto& set : options.sample_xy) k_max = std::max(k_max, set.size());
+  // Sets are named as their user knows them: from 1 when drawn here, by their number in the
+  // file (from 0) when given.
+  auto set_name = [&](std::size_t set) {
+    return given ? "sample set " + std::to_string(set) : "set " + std::to_string(set + 1);
+  };
+
+  // The geodesics: exact (CGAL), or on the two Steiner graphs.
+  std::unique_ptr<core::ExactGeodesics> exact_t, exact_s;
+  std::unique_ptr<core::SteinerGraph> graph_t, graph_s;
+  if (options.exact) {
+    try {
+      exact_t = std::make_unique<core::ExactGeodesics>(original);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(std::string("the DEM's grid TIN: ") + e.what());
     }
-    const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
-    result.max_searches =
-        std::min((options.memory_budget_bytes - result.graphs_bytes) / result.search_bytes,
-                 unbounded_searches(threads));
+    exact_s = std::make_unique<core::ExactGeodesics>(simplified);
+    stage("exact geodesics (CGAL): T " + std::to_string(original.faces.size()) + " faces, T' " +
+          std::to_string(simplified.faces.size()) + " faces");
+  } else {
+    result.delta_m = options.delta_m > 0 ? options.delta_m
+                                         : kDefaultDeltaFactor * core::mean_edge_length(original);
+    // Memory: both graphs, and as many searches on T (the larger graph) as the budget holds.
+    const auto est_t = core::SteinerGraph::estimate(original, result.delta_m);
+    const auto est_s = core::SteinerGraph::estimate(simplified, result.delta_m);
+    result.graphs_bytes = est_t.bytes + est_s.bytes;
+    result.search_bytes = core::GeodesicQuery::estimate_bytes(
+        std::max(est_t.nodes, est_s.nodes),
+        std::max(original.faces.size(), simplified.faces.size()), k_max);
+    if (options.memory_budget_bytes > 0) {
+      const std::size_t need = result.graphs_bytes + min_searches(method) * result.search_bytes;
+      if (need > options.memory_budget_bytes) {
+        throw InputError(
+            "the geodesics need about " + format_bytes(static_cast<double>(need)) +
+            " (Steiner graphs " + format_bytes(static_cast<double>(result.graphs_bytes)) + ", " +
+            std::to_string(min_searches(method)) + " searches of " +
+            format_bytes(static_cast<double>(result.search_bytes)) + "), more than the " +
+            format_bytes(static_cast<double>(options.memory_budget_bytes)) +
+            " available (--max-memory); use a larger --delta");
+      }
+      const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
+      result.max_searches =
+          std::min((options.memory_budget_bytes - result.graphs_bytes) / result.search_bytes,
+                   unbounded_searches(threads));
+    }
+    graph_t = std::make_unique<core::SteinerGraph>(original, result.delta_m);
+    graph_s = std::make_unique<core::SteinerGraph>(simplified, result.delta_m);
+    result.original_nodes = graph_t->node_count();
+    result.simplified_nodes = graph_s->node_count();
+    stage("Steiner graphs: T " + std::to_string(result.original_nodes) + " nodes, T' " +
+          std::to_string(result.simplified_nodes) + " nodes");
   }
-  const core::SteinerGraph graph_t(original, result.delta_m);
-  const core::SteinerGraph graph_s(simplified, result.delta_m);
-  result.original_nodes = graph_t.node_count();
-  result.simplified_nodes = graph_s.node_count();
-  stage("Steiner graphs: T " + std::to_string(result.original_nodes) + " nodes, T' " +
-        std::to_string(result.simplified_nodes) + " nodes");
   const core::PointLocator locate_s(simplified);
-  // One geodesic stage, its progress reported as its searches finish.
-  auto geodesics = [&](const std::string& name, const core::SteinerGraph& graph,
+  std::optional<core::PointLocator> locate_t;
+  if (given) locate_t.emplace(original);
+
+  // One geodesic stage on T (on_t) or T', its progress reported as its sources finish.
+  auto geodesics = [&](const std::string& name, bool on_t,
                        const std::vector<core::SurfacePoint>& points, PairwiseStats& stats) {
     stage(name);
-    PairwiseOptions po;
-    po.method = options.method;
-    po.max_searches = result.max_searches;
-    bool stop = false;  // note: written under pairwise_distances' report lock, read after it
-    if (progress) {
-      po.on_search = [&](std::size_t searched) {
-        if (!progress(name, static_cast<double>(searched) / static_cast<double>(k))) stop = true;
-      };
+    bool stop = false;  // note: written under the report lock of the pairwise call, read after it
+    const std::size_t k = points.size();
+    std::vector<double> d;
+    if (options.exact) {
+      std::function<bool(std::size_t)> on_source;
+      if (progress) {
+        // note: the exact sources take seconds each: a stop ends the stage at once
+        on_source = [&](std::size_t done) {
+          return progress(name, static_cast<double>(done) / static_cast<double>(k - 1));
+        };
+      }
+      d = exact_pairwise_distances(on_t ? *exact_t : *exact_s, points, on_source);
+    } else {
+      PairwiseOptions po;
+      po.method = method;
+      po.straighten = options.straighten;
+      po.max_searches = result.max_searches;
+      if (progress) {
+        po.on_search = [&](std::size_t searched) {
+          if (!progress(name, static_cast<double>(searched) / static_cast<double>(k))) stop = true;
+        };
+      }
+      d = pairwise_distances(on_t ? *graph_t : *graph_s, points, po, &stats);
     }
-    std::vector<double> d = pairwise_distances(graph, points, po, &stats);
     if (stop) throw Cancelled();
     return d;
   };
   PairwiseStats stats_t, stats_s;
-  for (int set = 0; set < options.sets; ++set) {
-    const std::uint64_t seed =
-        options.seed * 0x9E3779B97F4A7C15ull + static_cast<std::uint64_t>(set) + 1;
-    const std::vector<core::SurfacePoint> on_t = core::sample_uniform(original, k, seed);
+  double queries = 0;  // Steiner queries: one per source
+  for (std::size_t set = 0; set < sets; ++set) {
+    // The set's points on T: drawn, or given and located.
+    std::vector<core::SurfacePoint> on_t;
+    if (given) {
+      std::size_t outside = 0;
+      for (const auto& xy : options.sample_xy[set]) {
+        const auto hit = locate_t->locate(xy[0], xy[1], options.snap_m);
+        if (!hit) {
+          ++outside;
+          continue;
+        }
+        result.snapped += hit->snapped;
+        on_t.push_back(hit->point);
+      }
+      if (outside > 0) {
+        throw InputError(std::to_string(outside) + " of " +
+                         std::to_string(options.sample_xy[set].size()) + " points of " +
+                         set_name(set) + " lie outside the DEM's footprint");
+      }
+    } else {
+      const std::uint64_t seed =
+          options.seed * 0x9E3779B97F4A7C15ull + static_cast<std::uint64_t>(set) + 1;
+      on_t = core::sample_uniform(original, static_cast<std::size_t>(options.points), seed);
+    }
+    const std::size_t k = on_t.size();
     std::vector<core::SurfacePoint> on_s;
     std::size_t outside = 0;
     for (const auto& p : on_t) {
@@ -431,37 +552,68 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
     }
     if (outside > 0) {
       throw InputError(std::to_string(outside) + " of " + std::to_string(k) +
-                       " sample points of set " + std::to_string(set + 1) +
+                       (given ? " points of " : " sample points of ") + set_name(set) +
                        " lie outside the mesh's footprint");
     }
-    const std::string set_name =
-        "set " + std::to_string(set + 1) + "/" + std::to_string(options.sets);
+    const std::string stage_name = given ? set_name(set) + " (" + std::to_string(set + 1) + "/" +
+                                               std::to_string(sets) + ")"
+                                         : "set " + std::to_string(set + 1) + "/" +
+                                               std::to_string(sets);
+    const std::string kind = options.exact ? ": exact geodesics on T" : ": geodesics on T";
     auto t0 = std::chrono::steady_clock::now();
-    const std::vector<double> dt = geodesics(set_name + ": geodesics on T", graph_t, on_t, stats_t);
+    const std::vector<double> dt = geodesics(stage_name + kind, true, on_t, stats_t);
     auto t1 = std::chrono::steady_clock::now();
-    const std::vector<double> ds =
-        geodesics(set_name + ": geodesics on T'", graph_s, on_s, stats_s);
+    const std::vector<double> ds = geodesics(stage_name + kind + "'", false, on_s, stats_s);
     auto t2 = std::chrono::steady_clock::now();
     result.original_s += std::chrono::duration<double>(t1 - t0).count();
     result.simplified_s += std::chrono::duration<double>(t2 - t1).count();
+    queries += static_cast<double>(k);
+    // The set's error. note: never silently wrong: a pair T connects but T' does not fails the
+    // run (the mesh is in parts or slit); a pair T does not connect has no distance to compare
+    // and is counted apart.
     double sum = 0.0;
-    std::size_t pairs = 0;
+    std::size_t measured = 0, unconnected = 0, coincident = 0, broken = 0;
     for (std::size_t i = 0; i < k; ++i) {
       for (std::size_t j = i + 1; j < k; ++j) {
         const double a = dt[i * k + j], b = ds[i * k + j];
-        if (a > 0 && std::isfinite(a) && std::isfinite(b)) {
+        if (options.keep_pairs) {
+          result.pairs.push_back({static_cast<std::uint32_t>(set), static_cast<std::uint32_t>(i),
+                                  static_cast<std::uint32_t>(j), a, b});
+        }
+        if (!std::isfinite(a)) {
+          ++unconnected;
+        } else if (!(a > 0)) {
+          ++coincident;
+        } else if (!std::isfinite(b)) {
+          ++broken;
+        } else {
           sum += std::fabs(a - b) / a;
-          ++pairs;
+          ++measured;
         }
       }
     }
-    result.set_errors.push_back(pairs ? sum / pairs : 0.0);
+    if (broken > 0) {
+      throw InputError("the mesh does not connect " + std::to_string(broken) + " of the " +
+                       std::to_string(broken + measured) + " pairs of " + set_name(set) +
+                       " that T connects (is it in several parts, or slit?)");
+    }
+    if (measured == 0) {
+      throw InputError(set_name(set) + ": none of its " + std::to_string(k * (k - 1) / 2) +
+                       " pairs can be measured (" + std::to_string(unconnected) +
+                       " not connected on T, " + std::to_string(coincident) +
+                       " at distance 0 on T)");
+    }
+    result.pairs_measured += measured;
+    result.pairs_unconnected += unconnected;
+    result.pairs_coincident += coincident;
+    result.set_errors.push_back(sum / static_cast<double>(measured));
   }
   result.original_one_way = stats_t.one_way_pairs;
   result.simplified_one_way = stats_s.one_way_pairs;
+  result.straightened = stats_t.straightened + stats_s.straightened;
+  result.straighten_failed = stats_t.straighten_failed + stats_s.straighten_failed;
   // note: k queries per set, one per source (a source with no pair to measure settles none).
-  const double queries = static_cast<double>(k) * options.sets;
-  if (queries > 0) {
+  if (!options.exact && queries > 0) {
     result.original_searched = stats_t.settled / (queries * result.original_nodes);
     result.simplified_searched = stats_s.settled / (queries * result.simplified_nodes);
   }

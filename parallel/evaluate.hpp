@@ -2,6 +2,7 @@
 // with geodesics on the Steiner graph computed by parallel Dijkstra queries (oneTBB).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -26,6 +27,12 @@ enum class PairwiseMethod {
 // How pairwise_distances works, and whom it tells of its progress.
 struct PairwiseOptions {
   PairwiseMethod method = PairwiseMethod::kMeet;
+  // Each pair's Steiner path pulled taut into a locally shortest geodesic
+  // (core::PathStraightener): exact but for the rare pair whose Steiner path went around the
+  // wrong side of some hill. Needs the paths, so the pairs are measured one way (method is not
+  // used). false: the paper's Steiner distances, a few tenths of a percent to several percent
+  // long depending on delta.
+  bool straighten = true;
   // At most this many queries (each with its labels for every node) exist at once, fewer
   // threads working if need be (0: no bound; at least min_searches(method) must be allowed);
   // the figures do not depend on it.
@@ -40,6 +47,9 @@ struct PairwiseOptions {
 struct PairwiseStats {
   double settled = 0;             // graph nodes settled, all queries together
   std::size_t one_way_pairs = 0;  // pairs measured one way
+  // Straightening: paths straightened, the strip passes and reroutes around vertices they
+  // took, and paths that could not be (a degenerate face: their Steiner length is kept).
+  std::size_t straightened = 0, straighten_passes = 0, reroutes = 0, straighten_failed = 0;
 };
 
 // Geodesic distances between all pairs of points on the graph's mesh: out[i * K + j] for
@@ -61,12 +71,26 @@ struct EvalOptions {
   int sets = 3;      // independent sets
   std::uint64_t seed = 1;
   double delta_m = 0;  // Steiner spacing; 0: kDefaultDeltaFactor x mean edge of T
-  double snap_m = 0;   // points outside T' within this distance are snapped onto it
+  // Points outside T' (and given points outside T) within this distance are snapped onto it.
+  double snap_m = 0;
+  // Each pair's Steiner paths straightened into geodesics (PairwiseOptions::straighten): near
+  // exact, measured one way. false: the paper's Steiner distances, searched by `method`.
+  bool straighten = true;
   PairwiseMethod method = PairwiseMethod::kMeet;
   // Memory the geodesics may use (Steiner graphs and searches), 0: no bound. More threads than
   // fit work fewer at a time; a run that does not fit with one is refused before the graphs
-  // are built (InputError).
+  // are built (InputError). Not used with `exact` (its memory is not bounded).
   std::size_t memory_budget_bytes = 0;
+  // The reference: exact geodesics (CGAL's Surface_mesh_shortest_path, one propagation per
+  // source, see core/exact_geodesic.hpp) instead of the Steiner graph; delta_m, method and
+  // memory_budget_bytes are not used. For small meshes: 0.75 s and 250 MB per source on a
+  // 100 x 100 grid TIN, one source per thread at once.
+  bool exact = false;
+  // Given sample points instead of random ones: sample_xy[s][i] is point i of set s (x, y in
+  // the meshes' CRS; every set at least 2 points). points, sets and seed are then not used.
+  std::vector<std::vector<std::array<double, 2>>> sample_xy;
+  // Keep every pair's two distances in EvalResult::pairs.
+  bool keep_pairs = false;
 };
 
 // Default Steiner spacing as a fraction of the mean 3D edge length of the original TIN.
@@ -84,13 +108,34 @@ struct EvalResult {
   // Pairs measured one way (all of them with kOneWay; with kMeet those the radii missed).
   std::size_t original_one_way = 0, simplified_one_way = 0;
   // Estimated memory of the geodesics: the two graphs, one search on T; and how many searches
-  // the memory budget let exist at once (0: no bound).
+  // the memory budget let exist at once (0: no bound). All 0 with exact geodesics.
   std::size_t graphs_bytes = 0, search_bytes = 0, max_searches = 0;
+  bool exact = false;  // the geodesics were exact (EvalOptions::exact)
+  // Steiner paths straightened (EvalOptions::straighten), on T and on T' together: the paths,
+  // and those that could not be (a degenerate face: their Steiner length kept).
+  std::size_t straightened = 0, straighten_failed = 0;
+  // Pairs, all sets together: measured (in the set errors); not connected on T (a DEM whose
+  // valid cells form islands: no distance to compare, left out of the mean); and at distance 0
+  // on T (a point given twice: no relative error, left out).
+  std::size_t pairs_measured = 0, pairs_unconnected = 0, pairs_coincident = 0;
+  // With EvalOptions::keep_pairs: every pair i < j of every set, in order of (set, i, j), sets
+  // numbered from 0; distances +infinity where not connected.
+  struct Pair {
+    std::uint32_t set = 0, i = 0, j = 0;
+    double on_t = 0, on_s = 0;
+  };
+  std::vector<Pair> pairs;
 };
 
-// Samples K points uniformly in T's footprint per set (seeded by seed and set), lifts them onto
-// T and T', and compares all pairwise geodesics. Throws InputError when sample points fall
-// outside T' (farther than snap_m), with their count.
+// Samples K points uniformly in T's footprint per set (seeded by seed and set), or takes the
+// given sample_xy, lifts them onto T and T', and compares all pairwise geodesics. Never
+// silently wrong: throws InputError, with a count, when sample points fall outside T' or (given
+// ones) outside T, farther than snap_m; when pairs connected on T are not connected on T' (a
+// mesh in parts, or slit); and when a set has no pair to measure. Pairs not connected on T are
+// left out of the mean and counted (pairs_unconnected). With `exact`, throws InputError when T
+// cannot be given to CGAL, and std::invalid_argument naming the face or vertex when T' cannot
+// (see ExactGeodesics); without, std::invalid_argument when T' is no proper surface for the
+// Steiner graph (an edge of three faces).
 // `progress`, if given, is called with a one-line description of each stage as it starts
 // (graphs built, each set's geodesics on T and on T'), fraction 0, from the serial points
 // between them; and in the geodesic stages as each search finishes, with the fraction of the

@@ -75,7 +75,9 @@ RunResult run(const std::string& exe, const std::vector<std::string>& args,
   const auto out_path = io / "stdout", err_path = io / "stderr";
   const pid_t pid = ::fork();
   if (pid == 0) {
-    const int out = ::open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    const int out = options.stdout_to.empty()
+                        ? ::open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600)
+                        : ::open(options.stdout_to.c_str(), O_WRONLY);
     const int err = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
     ::dup2(out, 1);
     ::dup2(err, 2);

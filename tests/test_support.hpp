@@ -40,6 +40,7 @@ struct RunOptions {
   std::string signal_when;          // send `signal` once stderr contains this text...
   double signal_after_s = 0;        // ...or once this many seconds have passed (0: never)
   int signal = 15;                  // SIGTERM
+  std::string stdout_to;            // a file stdout goes to (e.g. /dev/full), not captured
 };
 
 // Runs an executable with arguments (no shell), capturing stdout and stderr.

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "io/json.hpp"
+#include "io/ply.hpp"
 #include "test_support.hpp"
 
 using namespace dpts;
@@ -156,4 +158,290 @@ TEST_CASE("dpts-eval answers each malformed mesh clearly", "[cli][eval][robust]"
       CHECK(r.out.find("\"faces_not_ccw\":1") != std::string::npos);
     }
   }
+}
+
+namespace {
+
+// Writes a sample-point file of the fixture DEM: S sets of K <= 6 points inside T, west of its
+// no-data hole (one exactly on the west outline edge).
+std::string sample_file(const test::TempDir& dir, int sets, int k) {
+  const auto path = (dir / "pts.csv").string();
+  std::ofstream out(path);
+  out.precision(17);
+  out << "set,x,y\n";
+  for (int s = 0; s < sets; ++s) {
+    for (int i = 0; i < k; ++i) {
+      const double x = i == 0 ? 400005.0 : 400012.5 + 12.1 * i + 3.3 * s;
+      const double y = 3799990.0 - 11.7 * i - 23.9 * s;
+      out << s << "," << x << "," << y << "\n";
+    }
+  }
+  return path;
+}
+
+std::vector<std::string> split(const std::string& line, char sep) {
+  std::vector<std::string> out(1);
+  for (char ch : line) {
+    if (ch == sep) {
+      out.emplace_back();
+    } else {
+      out.back() += ch;
+    }
+  }
+  return out;
+}
+
+// The mesh file of a dpts-par run on the fixture DEM (30 % kept).
+std::string simplified_mesh(const Fixture& fx) {
+  const auto mesh = (fx.dir / "m.ply").string();
+  REQUIRE(test::run(kPar, {"--quiet", "--keep", "30%", fx.dem, mesh}).exit_code == 0);
+  return mesh;
+}
+
+}  // namespace
+
+TEST_CASE("dpts-eval measures the pairs of --sample-points and writes each with --pairs-out",
+          "[cli][eval][sample]") {
+  Fixture fx;
+  const auto mesh = simplified_mesh(fx);
+  const auto pts = sample_file(fx.dir, 3, 6);
+  const auto pairs = (fx.dir / "pairs.csv").string();
+  const auto r = test::run(kEval, {"--dem", fx.dem, "--mesh", mesh, "--sample-points", pts,
+                                   "--pairs-out", pairs, "--json"});
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  const std::string js = last_line(r.out);
+  CHECK(io::json_field(js, "points") == "6");
+  CHECK(io::json_field(js, "sets") == "3");
+  CHECK(io::json_field(js, "pairs_measured") == "45");
+  CHECK(io::json_field(js, "pairs_unconnected_dem") == "0");
+  CHECK(io::json_field(js, "sample_points") == pts);
+  CHECK(r.out.find("distance error   sample set 0: ") != std::string::npos);
+  CHECK(r.out.find("pairs            45 measured; left out: 0 not connected on T, 0 at "
+                   "distance 0") != std::string::npos);
+  // Every pair i < j of every set, rel_err = |gd_T - gd_S| / gd_T; their mean is the set's error.
+  std::ifstream in(pairs);
+  std::string line;
+  std::getline(in, line);
+  CHECK(line == "set,i,j,gd_T,gd_S,rel_err");
+  std::vector<double> sum(3, 0.0);
+  std::size_t rows = 0;
+  while (std::getline(in, line)) {
+    const auto f = split(line, ',');
+    REQUIRE(f.size() == 6);
+    const double gd_t = std::stod(f[3]), gd_s = std::stod(f[4]), rel = std::stod(f[5]);
+    CHECK(std::stoi(f[1]) < std::stoi(f[2]));
+    CHECK(rel == std::fabs(gd_t - gd_s) / gd_t);
+    sum[std::stoul(f[0])] += rel;
+    ++rows;
+  }
+  CHECK(rows == 3 * 6 * 5 / 2);
+  const auto sets = split(io::json_field(js, "distance_error_sets").value_or("[]"), ',');
+  REQUIRE(sets.size() == 3);
+  CHECK(std::stod(sets[1]) == Approx(sum[1] / 15).epsilon(1e-12));
+}
+
+TEST_CASE("dpts-eval refuses --sample-points with --points or --sets, and outputs over inputs",
+          "[cli][eval][sample]") {
+  Fixture fx;
+  const auto pts = sample_file(fx.dir, 1, 3);
+  for (const char* flag : {"--points", "--sets"}) {
+    const auto r = test::run(kEval, {"--dem", fx.dem, "--mesh", "m.ply", "--sample-points", pts,
+                                     flag, "5"});
+    CHECK(r.exit_code == 2);
+    CHECK(r.err.rfind("dpts-eval: --sample-points and " + std::string(flag) +
+                          " cannot be combined (the file gives the points and sets)\n",
+                      0) == 0);
+  }
+  const auto exact = test::run(kEval, {"--dem", fx.dem, "--mesh", "m.ply", "--exact", "--delta", "3"});
+  CHECK(exact.exit_code == 2);
+  CHECK(exact.err.rfind("dpts-eval: --exact and --delta cannot be combined", 0) == 0);
+  const auto over =
+      test::run(kEval, {"--dem", fx.dem, "--mesh", "m.ply", "--sample-points", pts, "--pairs-out", pts});
+  CHECK(over.exit_code == 2);
+  CHECK(over.err.rfind("dpts-eval: --pairs-out " + pts + ": is an input of the run\n", 0) == 0);
+}
+
+TEST_CASE("dpts-eval answers each bad sample-point file in one line and writes nothing",
+          "[cli][eval][sample][robust]") {
+  Fixture fx;
+  const auto mesh = simplified_mesh(fx);
+  struct Case {
+    std::string what, text, message;
+  };
+  const std::vector<Case> cases = {
+      {"bad header", "set;x;y\n0;1;2\n", "line 1: expected the header set,x,y, found 'set;x;y'"},
+      {"wrong column count", "set,x,y\n0,400020,3799980\n0,400030\n",
+       "line 3: expected 3 values set,x,y, found 2"},
+      {"a value not a number", "set,x,y\n0,400020,3799980\n0,400030,north\n",
+       "line 3: y 'north': expected a finite number"},
+      {"sets not contiguous", "set,x,y\n0,400020,3799980\n0,400030,3799970\n2,400020,3799980\n"
+                              "2,400030,3799970\n",
+       "line 4: set 2, but set 1 has no points (sets are numbered from 0 without gaps)"},
+      {"a set of one point", "set,x,y\n0,400020,3799980\n", "line 2: set 0 has only this point"},
+  };
+  const auto pts = (fx.dir / "bad.csv").string();
+  const auto pairs = (fx.dir / "pairs.csv").string();
+  for (const auto& c : cases) {
+    INFO(c.what);
+    std::ofstream(pts, std::ios::trunc) << c.text;
+    const auto r = test::run(kEval, {"--dem", fx.dem, "--mesh", mesh, "--sample-points", pts,
+                                     "--pairs-out", pairs, "--json"});
+    CHECK(r.exit_code == 1);
+    CHECK(r.out.empty());
+    CHECK(r.err.rfind("dpts-eval: error: " + pts + ": " + c.message, 0) == 0);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK(fx.dir.files() == std::vector<std::string>{"bad.csv", "dem.tif", "m.ply"});
+  }
+  // A point outside the DEM's footprint (west of it by a metre), with the count.
+  std::ofstream(pts, std::ios::trunc) << "set,x,y\n0,400020,3799980\n0,400004,3799900\n"
+                                         "0,400030,3799970\n";
+  const auto outside = test::run(kEval, {"--dem", fx.dem, "--mesh", mesh, "--sample-points", pts,
+                                         "--pairs-out", pairs});
+  CHECK(outside.exit_code == 1);
+  CHECK(outside.err ==
+        "dpts-eval: error: 1 of 3 points of sample set 0 lie outside the DEM's footprint\n");
+  CHECK(fx.dir.files() == std::vector<std::string>{"bad.csv", "dem.tif", "m.ply"});
+}
+
+TEST_CASE("dpts-eval fails in one line when an output cannot be written, leaving no file",
+          "[cli][eval][robust]") {
+  Fixture fx;
+  const auto mesh = simplified_mesh(fx);
+  const std::vector<std::string> base = {"--dem", fx.dem, "--mesh", mesh, "--points", "8",
+                                         "--sets", "1"};
+  auto with = [&](std::vector<std::string> extra, const test::RunOptions& ro = {}) {
+    extra.insert(extra.begin(), base.begin(), base.end());
+    return test::run(kEval, extra, ro);
+  };
+  const std::vector<std::string> inputs = {"dem.tif", "m.ply"};
+  // A folder that does not exist.
+  const auto missing = (fx.dir / "no" / "pairs.csv").string();
+  const auto r1 = with({"--pairs-out", missing});
+  CHECK(r1.exit_code == 1);
+  CHECK(r1.err == "dpts-eval: error: " + missing + ": cannot create output (No such file or "
+                                                    "directory)\n");
+  CHECK(fx.dir.files() == inputs);
+  // A full disk, for the pairs and for the report on stdout (text or JSON).
+  const auto r2 = with({"--pairs-out", "/dev/full"});
+  CHECK(r2.exit_code == 1);
+  CHECK(r2.err == "dpts-eval: error: /dev/full: write failed (No space left on device)\n");
+  const auto pairs = (fx.dir / "pairs.csv").string();
+  test::RunOptions full;
+  full.stdout_to = "/dev/full";
+  for (const char* quiet : {"--json", "--quiet"}) {
+    INFO(quiet);
+    const auto r3 = with({"--json", quiet, "--pairs-out", pairs}, full);
+    CHECK(r3.exit_code == 1);
+    CHECK(r3.err == "dpts-eval: error: standard output: write failed (No space left on device)\n");
+    CHECK(fx.dir.files() == inputs);
+  }
+  const auto text = with({"--pairs-out", pairs}, full);
+  CHECK(text.exit_code == 1);
+  CHECK(text.err == "dpts-eval: error: standard output: write failed (No space left on device)\n");
+  CHECK(fx.dir.files() == inputs);
+  // A file size limit (a full quota) hit while writing the pairs (nothing on stdout).
+  test::RunOptions limit;
+  limit.file_size_limit = 300;
+  const auto r4 = with({"--quiet", "--pairs-out", pairs}, limit);
+  CHECK(r4.exit_code == 1);
+  CHECK(r4.err.rfind("dpts-eval: error: " + pairs + ": write failed", 0) == 0);
+  CHECK(std::count(r4.err.begin(), r4.err.end(), '\n') == 1);
+  CHECK(fx.dir.files() == inputs);
+}
+
+TEST_CASE("dpts-eval --exact measures with exact geodesics on a small DEM", "[cli][eval][exact]") {
+  Fixture fx;
+  const auto mesh = simplified_mesh(fx);
+  const auto r = test::run(kEval, {"--dem", fx.dem, "--mesh", mesh, "--exact", "--points", "6",
+                                   "--sets", "2", "--json"});
+  REQUIRE(r.exit_code == 0);
+  const std::string js = last_line(r.out);
+  CHECK(io::json_field(js, "geodesics") == "exact");
+  CHECK(io::json_field(js, "pairs_measured") == "30");
+  CHECK(std::stod(io::json_field(js, "distance_error").value_or("0")) > 0);
+  CHECK(r.out.find("geodesics        exact (CGAL Surface_mesh_shortest_path): T ") !=
+        std::string::npos);
+  // CGAL takes no folded face (measured without --exact): refused in one line naming it.
+  const auto folded = (fx.dir / "folded.ply").string();
+  std::ofstream(folded) << "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\n"
+                           "property double y\nproperty double z\nelement face 2\n"
+                           "property list uchar int vertex_indices\nend_header\n"
+                           "400005 3799995 300\n400235 3799995 300\n400235 3799825 300\n"
+                           "400005 3799825 300\n3 0 2 1\n3 0 2 3\n";
+  const auto bad = test::run(kEval, {"--dem", fx.dem, "--mesh", folded, "--exact", "--points", "4"});
+  CHECK(bad.exit_code == 1);
+  CHECK(bad.err.rfind("dpts-eval: error: " + folded + ": face 1 cannot join the surface for "
+                      "exact geodesics", 0) == 0);
+  CHECK(std::count(bad.err.begin(), bad.err.end(), '\n') == 1);
+}
+
+TEST_CASE("dpts-eval fails with the count of pairs a mesh in two parts does not connect",
+          "[cli][eval][robust]") {
+  Fixture fx;
+  // The DEM's own grid TIN less its column of squares from x = 400145 to 400155 m: two parts.
+  const auto full = (fx.dir / "full.ply").string();
+  REQUIRE(test::run(kPar, {"--quiet", "--keep", "100%", fx.dem, full}).exit_code == 0);
+  io::Mesh m = io::read_ply_file(full);
+  const std::size_t faces = m.faces.size();
+  m.faces.erase(std::remove_if(m.faces.begin(), m.faces.end(),
+                               [&](const std::array<std::uint32_t, 3>& f) {
+                                 const double cx =
+                                     (m.xyz[3 * f[0]] + m.xyz[3 * f[1]] + m.xyz[3 * f[2]]) / 3;
+                                 return cx > 400145 && cx < 400155;
+                               }),
+                m.faces.end());
+  REQUIRE(m.faces.size() == faces - 2 * 17);
+  const auto slit = (fx.dir / "slit.ply").string();
+  {
+    std::ofstream out(slit, std::ios::binary);
+    io::write_ply(out, m, io::PlyFormat::binary_little_endian);
+  }
+  const auto pts = (fx.dir / "pts.csv").string();
+  std::ofstream(pts) << "set,x,y\n0,400020,3799980\n0,400100,3799900\n0,400200,3799950\n"
+                        "0,400230,3799830\n";
+  const auto r = test::run(kEval, {"--dem", fx.dem, "--mesh", slit, "--sample-points", pts});
+  CHECK(r.exit_code == 1);
+  CHECK(r.err == "dpts-eval: error: the mesh does not connect 4 of the 6 pairs of sample set 0 "
+                 "that T connects (is it in several parts, or slit?)\n");
+}
+
+TEST_CASE("dpts-eval welds a triangle soup and measures it as the indexed mesh",
+          "[cli][eval][robust]") {
+  Fixture fx;
+  const auto mesh = simplified_mesh(fx);
+  const io::Mesh indexed = io::read_ply_file(mesh);
+  io::Mesh soup;
+  for (const auto& f : indexed.faces) {
+    const auto first = static_cast<std::uint32_t>(soup.vertex_count());
+    for (auto v : f) {
+      soup.xyz.insert(soup.xyz.end(), indexed.xyz.begin() + 3 * v, indexed.xyz.begin() + 3 * v + 3);
+    }
+    soup.faces.push_back({first, first + 1, first + 2});
+  }
+  const auto soup_path = (fx.dir / "soup.ply").string();
+  {
+    std::ofstream out(soup_path, std::ios::binary);
+    io::write_ply(out, soup, io::PlyFormat::ascii);
+  }
+  const std::vector<std::string> common = {"--dem", fx.dem, "--points", "12", "--sets", "2",
+                                           "--json"};
+  auto run_on = [&](const std::string& m) {
+    std::vector<std::string> args = common;
+    args.insert(args.end(), {"--mesh", m});
+    return test::run(kEval, args);
+  };
+  const auto a = run_on(mesh), b = run_on(soup_path);
+  REQUIRE(a.exit_code == 0);
+  REQUIRE(b.exit_code == 0);
+  const std::string ja = last_line(a.out), jb = last_line(b.out);
+  CHECK(io::json_field(ja, "merged_vertices") == "0");
+  const std::size_t merged = soup.vertex_count() - indexed.vertex_count();
+  CHECK(io::json_field(jb, "merged_vertices") == std::to_string(merged));
+  CHECK(io::json_field(jb, "mesh_vertices") == std::to_string(indexed.vertex_count()));
+  CHECK(io::json_field(jb, "bad_edges") == "0");
+  CHECK(std::stod(io::json_field(jb, "distance_error").value_or("-1")) ==
+        Approx(std::stod(io::json_field(ja, "distance_error").value_or("-2"))).epsilon(1e-12));
+  CHECK(b.out.find("welded           " + std::to_string(merged) + " vertices") !=
+        std::string::npos);
 }

@@ -126,9 +126,10 @@ TEST_CASE("meeting in the middle gives the distances of one-way queries",
     const core::SteinerGraph graph(mesh, 0.25 * core::mean_edge_length(hills_grid_mesh(g)));
     const auto points = core::sample_uniform(mesh, 40, 5);
     par::PairwiseStats meet_stats, one_way_stats;
-    par::PairwiseOptions one_way;
+    par::PairwiseOptions steiner, one_way;
+    steiner.straighten = one_way.straighten = false;
     one_way.method = par::PairwiseMethod::kOneWay;
-    const auto meet = par::pairwise_distances(graph, points, {}, &meet_stats);
+    const auto meet = par::pairwise_distances(graph, points, steiner, &meet_stats);
     const auto ref = par::pairwise_distances(graph, points, one_way, &one_way_stats);
     const std::size_t k = points.size();
     for (std::size_t i = 0; i < k; ++i) {
@@ -149,6 +150,7 @@ TEST_CASE("a memory budget bounds the searches at once, with the same figures",
           "[parallel][evaluate][memory]") {
   const auto [t, s] = hills_and_20_percent();
   auto opt = eval_options(30, 1);
+  opt.straighten = false;  // meeting in the middle: a finished search waits for its joins
   tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
   const auto free_run = par::evaluate_distances(t, s, opt);
   CHECK(free_run.max_searches == 0);
@@ -191,8 +193,10 @@ TEST_CASE("pairwise distances with a bound on searches give the same distances",
   const core::SteinerGraph graph(t, 0.25 * core::mean_edge_length(t));
   const auto points = core::sample_uniform(t, 25, 9);
   tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
-  const auto free_run = par::pairwise_distances(graph, points);
-  par::PairwiseOptions bounded;
+  par::PairwiseOptions steiner;  // meeting in the middle (Steiner distances only)
+  steiner.straighten = false;
+  const auto free_run = par::pairwise_distances(graph, points, steiner);
+  par::PairwiseOptions bounded = steiner;
   for (std::size_t bound : {2, 3, 4}) {
     CAPTURE(bound);
     bounded.max_searches = bound;

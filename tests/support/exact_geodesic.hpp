@@ -1,5 +1,5 @@
-// Exact geodesic distances on a small TIN with CGAL's Surface_mesh_shortest_path (Chen-Han /
-// Xin-Wang), the reference the Steiner-graph distances are checked against.
+// The Steiner-graph distances checked against exact geodesics (core::ExactGeodesics: CGAL's
+// Surface_mesh_shortest_path), on hand-made TINs and crops of real DEMs.
 #pragma once
 
 #include <string>
@@ -9,7 +9,8 @@
 
 namespace dpts::test {
 
-// Exact distances from source to each target on mesh (points given by x, y, z on the mesh).
+// Exact distances from source to each target on mesh (points on the mesh, their face set):
+// core::ExactGeodesics built for this one source.
 std::vector<double> exact_geodesics(const core::TriMesh& mesh, const core::SurfacePoint& source,
                                     const std::vector<core::SurfacePoint>& targets);
 

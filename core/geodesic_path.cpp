@@ -1,0 +1,413 @@
+// Straightening Steiner paths into exact (locally shortest) geodesics: unfolding, funnel,
+// rerouting around vertices (see geodesic_path.hpp for the sources).
+#include "core/geodesic_path.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#ifdef DPTS_TRACE_GEODESIC
+#include <cstdio>
+#endif
+
+namespace dpts::core {
+namespace {
+
+constexpr std::uint32_t kNoVertex = 0xFFFFFFFFu;
+constexpr double kPi = 3.14159265358979323846;
+// Most faces around one vertex a walk visits (a fan larger than this is treated as open).
+constexpr int kMaxFan = 4096;
+// Most passes of pulling taut and rerouting for one path (each pass strictly shortens it).
+constexpr int kMaxPasses = 256;
+
+struct Vec3 {
+  double x, y, z;
+};
+Vec3 at(const TriMesh& m, std::uint32_t v) {
+  return {m.xyz[3 * v], m.xyz[3 * v + 1], m.xyz[3 * v + 2]};
+}
+Vec3 sub(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+double dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+double cross_norm(Vec3 a, Vec3 b) {
+  const double cx = a.y * b.z - a.z * b.y, cy = a.z * b.x - a.x * b.z, cz = a.x * b.y - a.y * b.x;
+  return std::sqrt(cx * cx + cy * cy + cz * cz);
+}
+
+// Barycentric coordinates (of b and c) of p in the 3D triangle a, b, c (p on its plane).
+std::array<double, 2> barycentric(Vec3 a, Vec3 b, Vec3 c, Vec3 p) {
+  const Vec3 v0 = sub(b, a), v1 = sub(c, a), v2 = sub(p, a);
+  const double d00 = dot(v0, v0), d01 = dot(v0, v1), d11 = dot(v1, v1);
+  const double d20 = dot(v2, v0), d21 = dot(v2, v1);
+  const double den = d00 * d11 - d01 * d01;
+  return {(d11 * d20 - d01 * d21) / den, (d00 * d21 - d01 * d20) / den};
+}
+
+}  // namespace
+
+bool PathStraightener::contains(std::uint32_t f, std::uint32_t v) const {
+  const auto& face = g_.mesh().faces[f];
+  return face[0] == v || face[1] == v || face[2] == v;
+}
+
+double PathStraightener::corner_angle(std::uint32_t f, std::uint32_t v) const {
+  const auto& face = g_.mesh().faces[f];
+  const int i = face[0] == v ? 0 : face[1] == v ? 1 : 2;
+  const Vec3 p = at(g_.mesh(), v);
+  const Vec3 a = sub(at(g_.mesh(), face[(i + 1) % 3]), p);
+  const Vec3 b = sub(at(g_.mesh(), face[(i + 2) % 3]), p);
+  return std::atan2(cross_norm(a, b), dot(a, b));
+}
+
+namespace {
+
+// The face across f's edge (v, x), kNoFace on the outline.
+std::uint32_t across_edge(const SteinerGraph& g, std::uint32_t f, std::uint32_t v,
+                          std::uint32_t x) {
+  const auto& face = g.mesh().faces[f];
+  for (int i = 0; i < 3; ++i) {
+    const std::uint32_t a = face[i], b = face[(i + 1) % 3];
+    if ((a == v && b == x) || (a == x && b == v)) return g.across(f, i);
+  }
+  return SteinerGraph::kNoFace;
+}
+
+// The corner of face f that is neither v nor x.
+std::uint32_t third(const TriMesh& m, std::uint32_t f, std::uint32_t v, std::uint32_t x) {
+  for (std::uint32_t c : m.faces[f]) {
+    if (c != v && c != x) return c;
+  }
+  return kNoVertex;
+}
+
+}  // namespace
+
+double PathStraightener::total_angle(std::uint32_t v, std::uint32_t f) const {
+  // Around v from f, across the edge to one of f's other corners, until back at f.
+  double sum = corner_angle(f, v);
+  std::uint32_t cur = f, x = third(g_.mesh(), f, v, kNoVertex);
+  for (int step = 0; step < kMaxFan; ++step) {
+    const std::uint32_t next = across_edge(g_, cur, v, x);
+    if (next == SteinerGraph::kNoFace) return -1;  // v is on the outline
+    if (next == f) return sum;
+    sum += corner_angle(next, v);
+    x = third(g_.mesh(), next, v, x);
+    cur = next;
+  }
+  return -1;
+}
+
+bool PathStraightener::walk_around(std::uint32_t v, std::uint32_t from, std::uint32_t to,
+                                   bool shortest, std::uint32_t avoid,
+                                   std::vector<std::uint32_t>& fan) const {
+  // The faces strictly between `from` and `to` around v, leaving `from` across its edge (v, x).
+  auto walk = [&](std::uint32_t x, std::vector<std::uint32_t>& out) {
+    out.clear();
+    std::uint32_t cur = from;
+    for (int step = 0; step < kMaxFan; ++step) {
+      const std::uint32_t next = across_edge(g_, cur, v, x);
+      if (next == SteinerGraph::kNoFace || next == from) return false;
+      if (next == to) return true;
+      out.push_back(next);
+      x = third(g_.mesh(), next, v, x);
+      cur = next;
+    }
+    return false;
+  };
+  const auto& face = g_.mesh().faces[from];
+  const int i = face[0] == v ? 0 : face[1] == v ? 1 : 2;
+  const std::uint32_t x0 = face[(i + 1) % 3], x1 = face[(i + 2) % 3];
+  if (!shortest) {
+    // The direction whose first face is not `avoid`.
+    return walk(across_edge(g_, from, v, x0) == avoid ? x1 : x0, fan);
+  }
+  std::vector<std::uint32_t> other;
+  const bool ok0 = walk(x0, fan), ok1 = walk(x1, other);
+  if (ok1 && (!ok0 || other.size() < fan.size())) fan.swap(other);
+  return ok0 || ok1;
+}
+
+void PathStraightener::push_face(std::uint32_t f) {
+  // note: a strip that steps back into the face it came from is reduced (x, y, x -> x): the
+  // detour through y can only be longer.
+  const std::size_t n = strip_.size();
+  if (n >= 2 && strip_[n - 2] == f) {
+    strip_.pop_back();
+  } else if (n == 0 || strip_.back() != f) {
+    strip_.push_back(f);
+  }
+}
+
+bool PathStraightener::build_strip(const SurfacePoint& source,
+                                   const std::vector<std::uint32_t>& nodes,
+                                   const SurfacePoint& target) {
+  strip_.clear();
+  push_face(source.face);
+  const std::uint32_t nv = static_cast<std::uint32_t>(g_.mesh().vertex_count());
+  // Whether face f holds graph node p (a vertex, or a point inside one of its edges).
+  auto holds = [&](std::uint32_t f, std::uint32_t p) {
+    const auto ends = g_.node_edge_ends(p);
+    return contains(f, ends[0]) && contains(f, ends[1]);
+  };
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    const std::uint32_t u = nodes[i];
+    const std::uint32_t a = strip_.back();
+    // The face of the next segment: the target's, or one holding both its nodes (the current
+    // face if it does: a segment along an edge lies in either of its faces).
+    std::uint32_t b = SteinerGraph::kNoFace;
+    if (i + 1 == nodes.size()) {
+      b = target.face;
+    } else if (holds(a, u) && holds(a, nodes[i + 1])) {
+      b = a;
+    } else {
+      g_.for_each_face_of_vertex(g_.node_edge_ends(u)[0], [&](std::uint32_t f) {
+        if (b == SteinerGraph::kNoFace && holds(f, u) && holds(f, nodes[i + 1])) b = f;
+      });
+    }
+    if (b == SteinerGraph::kNoFace || !holds(b, u) || !holds(a, u)) return false;
+    if (b == a) continue;
+    bool adjacent = false;
+    for (int e = 0; e < 3; ++e) adjacent = adjacent || g_.across(a, e) == b;
+    if (!adjacent) {
+      // The path passes through vertex u: around it, the side with fewer faces.
+      if (u >= nv || !walk_around(u, a, b, true, SteinerGraph::kNoFace, fan_)) return false;
+      for (std::uint32_t f : fan_) push_face(f);
+    }
+    push_face(b);
+  }
+  return strip_.back() == target.face && strip_.front() == source.face;
+}
+
+bool PathStraightener::unfold(const SurfacePoint& source, const SurfacePoint& target) {
+  const TriMesh& m = g_.mesh();
+  portals_.clear();
+  // The current face: its corners and their plane positions.
+  std::array<std::uint32_t, 3> ids = m.faces[strip_[0]];
+  std::array<Point2, 3> p2;
+  {
+    const Vec3 a = at(m, ids[0]), b = at(m, ids[1]), c = at(m, ids[2]);
+    const Vec3 ab = sub(b, a), ac = sub(c, a);
+    const double len = std::sqrt(dot(ab, ab));
+    if (!(len > 0)) return false;
+    p2 = {Point2{0, 0}, Point2{len, 0}, Point2{dot(ac, ab) / len, cross_norm(ab, ac) / len}};
+    if (!(p2[2].y > 1e-12 * len)) return false;
+  }
+  auto lift2 = [&](const SurfacePoint& s) {
+    const auto w = barycentric(at(m, ids[0]), at(m, ids[1]), at(m, ids[2]), Vec3{s.x, s.y, s.z});
+    return Point2{p2[0].x + w[0] * (p2[1].x - p2[0].x) + w[1] * (p2[2].x - p2[0].x),
+                  p2[0].y + w[0] * (p2[1].y - p2[0].y) + w[1] * (p2[2].y - p2[0].y)};
+  };
+  const Point2 s2 = lift2(source);
+  portals_.push_back({kNoVertex, kNoVertex, s2, s2});
+  for (std::size_t j = 1; j < strip_.size(); ++j) {
+    const auto& next = m.faces[strip_[j]];
+    // The shared edge (u, w), the previous face's corner off it (k) and the new one (r).
+    int k = -1, shared = 0;
+    std::uint32_t r = kNoVertex;
+    for (int c = 0; c < 3; ++c) {
+      if (next[0] == ids[c] || next[1] == ids[c] || next[2] == ids[c]) {
+        ++shared;
+      } else {
+        k = c;
+      }
+    }
+    if (shared != 2 || k < 0) return false;
+    for (std::uint32_t c : next) {
+      if (c != ids[0] && c != ids[1] && c != ids[2]) r = c;
+    }
+    if (r == kNoVertex) return false;
+    const int iu = (k + 1) % 3, iw = (k + 2) % 3;
+    const Point2 u2 = p2[iu], w2 = p2[iw], b2 = p2[k];
+    // r in the plane: at its 3D offsets along and off the edge, on the side away from b.
+    const Vec3 u3 = at(m, ids[iu]), e3 = sub(at(m, ids[iw]), u3), r3 = sub(at(m, r), u3);
+    const double len = std::sqrt(dot(e3, e3));
+    const double along = dot(r3, e3) / len, off = cross_norm(e3, r3) / len;
+    if (!(len > 0) || !(off > 1e-12 * len)) return false;
+    const double dx = (w2.x - u2.x) / len, dy = (w2.y - u2.y) / len;
+    const double side = -dy * (b2.x - u2.x) + dx * (b2.y - u2.y);  // b's side of the edge
+    const double s = side > 0 ? -1.0 : 1.0;
+    const Point2 r2{u2.x + along * dx - s * off * dy, u2.y + along * dy + s * off * dx};
+    // Seen from b, the portal's left end is counter-clockwise from its right end.
+    const double turn = (w2.x - b2.x) * (u2.y - b2.y) - (w2.y - b2.y) * (u2.x - b2.x);
+    if (turn > 0) {
+      portals_.push_back({ids[iu], ids[iw], u2, w2});
+    } else {
+      portals_.push_back({ids[iw], ids[iu], w2, u2});
+    }
+    ids = {ids[iu], ids[iw], r};
+    p2 = {u2, w2, r2};
+  }
+  const Point2 t2 = lift2(target);
+  portals_.push_back({kNoVertex, kNoVertex, t2, t2});
+  return true;
+}
+
+double PathStraightener::funnel() {
+  // The simple funnel: the apex, and the funnel's left and right ends (portal indices); a
+  // portal end that is the apex itself constrains nothing.
+  auto cross = [](Point2 a, Point2 b, Point2 c) {
+    return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+  };
+  auto same = [](Point2 a, Point2 b) { return a.x == b.x && a.y == b.y; };
+  taut_.assign(1, portals_[0].l);
+  taut_portal_.assign(1, 0);
+  bends_.clear();
+  Point2 apex = portals_[0].l, left = apex, right = apex;
+  std::size_t left_i = 0, right_i = 0;
+  auto bend = [&](Point2 p, std::size_t i, std::uint32_t vertex) {
+    taut_.push_back(p);
+    taut_portal_.push_back(i);
+    bends_.push_back({vertex, i});
+    apex = left = right = p;
+    left_i = right_i = i;
+  };
+  for (std::size_t i = 1; i < portals_.size(); ++i) {
+    const Portal& p = portals_[i];
+    // note: an end at the apex (unconstrained) narrows anything; a new end is checked against
+    // the other side unless that one is unconstrained too, or the same point (the target).
+    if (!same(p.r, apex) && (same(apex, right) || cross(apex, right, p.r) >= 0)) {
+      if (same(apex, left) || same(p.r, left) || cross(apex, left, p.r) < 0) {
+        right = p.r;
+        right_i = i;
+      } else {
+        // The right side crosses the left one: the path bends at the left end.
+        bend(left, left_i, portals_[left_i].left);
+        i = left_i;
+        continue;
+      }
+    }
+    if (!same(p.l, apex) && (same(apex, left) || cross(apex, left, p.l) <= 0)) {
+      if (same(apex, right) || same(p.l, right) || cross(apex, right, p.l) > 0) {
+        left = p.l;
+        left_i = i;
+      } else {
+        bend(right, right_i, portals_[right_i].right);
+        i = right_i;
+        continue;
+      }
+    }
+  }
+  taut_.push_back(portals_.back().l);
+  taut_portal_.push_back(portals_.size() - 1);
+  double len = 0;
+  for (std::size_t i = 1; i < taut_.size(); ++i) {
+    len += std::hypot(taut_[i].x - taut_[i - 1].x, taut_[i].y - taut_[i - 1].y);
+  }
+  return len;
+}
+
+double PathStraightener::inside_angle(const Bend& b, std::size_t first, std::size_t last,
+                                      Point2 prev, Point2 next) const {
+  // The path meets v inside the run's first face and leaves it inside its last (a straight
+  // segment that crossed an edge at v first would lie on that edge): the angle swept on the
+  // strip's side is the part of the first face beyond the incoming segment, the faces between,
+  // and the part of the last face before the outgoing one.
+  const Portal& bp = portals_[b.portal];
+  const Point2 v = bp.left == b.vertex ? bp.l : bp.r;
+  auto other_end = [&](std::size_t portal) {
+    const Portal& p = portals_[portal];
+    return p.left == b.vertex ? Point2{p.r.x - v.x, p.r.y - v.y} : Point2{p.l.x - v.x, p.l.y - v.y};
+  };
+  auto angle = [](Point2 a, Point2 c) {
+    return std::atan2(std::fabs(a.x * c.y - a.y * c.x), a.x * c.x + a.y * c.y);
+  };
+  const Point2 in{prev.x - v.x, prev.y - v.y}, out{next.x - v.x, next.y - v.y};
+  double sum = angle(in, other_end(first + 1)) + angle(other_end(last), out);
+  for (std::size_t j = first + 1; j < last; ++j) sum += corner_angle(strip_[j], b.vertex);
+  return sum;
+}
+
+double PathStraightener::length(const SurfacePoint& source, const std::vector<std::uint32_t>& nodes,
+                                const SurfacePoint& target) {
+  ++stats_.paths;
+  if (!build_strip(source, nodes, target)) {
+    ++stats_.failed;
+    return -1;
+  }
+  struct Reroute {
+    std::size_t first, last, fan_begin, fan_end;
+  };
+  std::vector<Reroute> reroutes;
+  std::vector<std::uint32_t> fans;
+  double best = std::numeric_limits<double>::infinity();
+  for (int pass = 0; pass < kMaxPasses; ++pass) {
+    if (!unfold(source, target)) break;
+    const double len = funnel();
+    ++stats_.passes;
+    // note: each reroute shortens the path; one that does not (rounding) ends the passes.
+    if (!(len < best * (1 - 1e-12))) return std::min(len, best);
+    best = len;
+    // Bends whose other side is shorter than pi: the path through that side is shorter.
+    // note: one reroute per run of faces in a pass (runs of later bends must not overlap).
+    reroutes.clear();
+    fans.clear();
+    std::size_t free_from = 0;
+    for (std::size_t k = 0; k < bends_.size(); ++k) {
+      const Bend& b = bends_[k];
+      std::size_t first = b.portal - 1, last = b.portal;
+      while (first > 0 && contains(strip_[first - 1], b.vertex)) --first;
+      while (last + 1 < strip_.size() && contains(strip_[last + 1], b.vertex)) ++last;
+      if (first < free_from) continue;
+      const double total = total_angle(b.vertex, strip_[first]);
+      if (total < 0) continue;  // on the outline: nothing on the other side
+      const double inside = inside_angle(b, first, last, taut_[k], taut_[k + 2]);
+#ifdef DPTS_TRACE_GEODESIC
+      std::fprintf(stderr, "bend v %u portal %zu run [%zu,%zu] of %zu total %.4f inside %.4f\n",
+                   b.vertex, b.portal, first, last, strip_.size(), total, inside);
+#endif
+      if (!(total - inside < kPi - 1e-9)) continue;
+      const std::size_t begin = fans.size();
+      if (!walk_around(b.vertex, strip_[first], strip_[last], false, strip_[first + 1], fan_)) {
+        continue;
+      }
+      fans.insert(fans.end(), fan_.begin(), fan_.end());
+      reroutes.push_back({first, last, begin, fans.size()});
+      free_from = last;
+    }
+    if (reroutes.empty()) return len;
+    stats_.reroutes += reroutes.size();
+    next_strip_.swap(strip_);
+    strip_.clear();
+    std::size_t j = 0;
+    for (const Reroute& r : reroutes) {
+      for (; j <= r.first; ++j) push_face(next_strip_[j]);
+      for (std::size_t f = r.fan_begin; f < r.fan_end; ++f) push_face(fans[f]);
+      j = r.last;
+    }
+    for (; j < next_strip_.size(); ++j) push_face(next_strip_[j]);
+  }
+  if (best < std::numeric_limits<double>::infinity()) return best;
+  ++stats_.failed;
+  return -1;
+}
+
+double PathStraightener::shortest(const GeodesicQuery& query, const SurfacePoint& source,
+                                  std::size_t target, const SurfacePoint& target_point,
+                                  double steiner_distance) {
+  if (!std::isfinite(steiner_distance)) return steiner_distance;
+  double best = steiner_distance;
+  query.path(target, path_);
+  const double direct = length(source, path_, target_point);
+  if (direct >= 0) best = std::min(best, direct);
+  // note: a node reached from a node already tried, or from the source, ends the same path
+  // taut in the same way: one path per predecessor.
+  tried_.clear();
+  if (!path_.empty()) {
+    tried_.push_back(path_.back());
+    if (path_.size() > 1) tried_.push_back(path_[path_.size() - 2]);
+  }
+  g_.face_nodes(target_point.face, around_);
+  for (std::uint32_t v : around_) {
+    if (!std::isfinite(query.settled_distance(v))) continue;
+    const std::uint32_t p = query.pred(v);
+    if (p == LabelHeap::kNone || std::find(tried_.begin(), tried_.end(), v) != tried_.end() ||
+        std::find(tried_.begin(), tried_.end(), p) != tried_.end()) {
+      continue;
+    }
+    tried_.push_back(p);
+    query.path_to_node(v, path_);
+    const double len = length(source, path_, target_point);
+    if (len >= 0) best = std::min(best, len);
+  }
+  return best;
+}
+
+}  // namespace dpts::core

@@ -1,0 +1,88 @@
+// Exact geodesic lengths from Steiner-graph paths: the path's strip of faces is unfolded into
+// the plane and the path pulled taut inside it (the funnel algorithm: Lee and Preparata,
+// "Euclidean shortest paths in the presence of rectilinear barriers", Networks 14, 1984;
+// Hershberger and Snoeyink, "Computing minimum length paths of a given homotopy class", CGTA 4,
+// 1994), then, wherever the taut path bends around a mesh vertex whose other side is shorter
+// (angle below pi), the strip is rerouted through that side and pulled taut again, until no
+// such vertex is left: a locally shortest path, which is exact (Xin and Wang, "Efficiently
+// determining a locally exact shortest path on polyhedral surfaces", Computer-Aided Design 39,
+// 2007). Started from a Steiner path within about 1 % of the shortest, it is the geodesic.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "core/steiner_graph.hpp"
+
+namespace dpts::core {
+
+// Per-thread scratch for straightening the paths of one SteinerGraph (read-only, shared).
+class PathStraightener {
+ public:
+  explicit PathStraightener(const SteinerGraph& graph) : g_(graph) {}
+
+  // The length of the locally shortest surface path from source to target that starts in the
+  // homotopy class of the Steiner path through `nodes` (GeodesicQuery::path). Never longer than
+  // the Steiner path when it succeeds; a real path on the mesh, so never shorter than the exact
+  // geodesic. Returns a negative value when the path's strip cannot be unfolded (a degenerate
+  // face, an edge of more than two faces): the caller keeps the Steiner length then.
+  double length(const SurfacePoint& source, const std::vector<std::uint32_t>& nodes,
+                const SurfacePoint& target);
+
+  // The shortest of the straightened paths the last search of `query` found to its target
+  // `target` (at `target_point`): the path it settled the target through, and those through
+  // every other node of the target's face (where the search's cut locus, two routes of nearly
+  // equal length around some hill, passes by the target, its boundary nodes are reached by
+  // both; the graph's error may have ranked the longer first). Infinity where the target was
+  // not reached; the Steiner distance where no path could be straightened.
+  double shortest(const GeodesicQuery& query, const SurfacePoint& source, std::size_t target,
+                  const SurfacePoint& target_point, double steiner_distance);
+
+  // What the calls so far did: paths straightened, strips pulled taut (one per pass), vertices
+  // rerouted around, and paths that could not be straightened.
+  struct Stats {
+    std::size_t paths = 0, passes = 0, reroutes = 0, failed = 0;
+  };
+  const Stats& stats() const { return stats_; }
+
+ private:
+  struct Point2 {
+    double x, y;
+  };
+  // A portal of the unfolded strip: the edge between face j - 1 and face j, its end on the
+  // left and on the right of the direction of travel (mesh vertices and their plane positions).
+  struct Portal {
+    std::uint32_t left, right;
+    Point2 l, r;
+  };
+  // A vertex the taut path bends at: the portal (1..faces - 1) whose end it is.
+  struct Bend {
+    std::uint32_t vertex;
+    std::size_t portal;
+  };
+
+  bool build_strip(const SurfacePoint& source, const std::vector<std::uint32_t>& nodes,
+                   const SurfacePoint& target);
+  void push_face(std::uint32_t f);
+  bool walk_around(std::uint32_t v, std::uint32_t from, std::uint32_t to, bool shortest,
+                   std::uint32_t avoid, std::vector<std::uint32_t>& fan) const;
+  bool unfold(const SurfacePoint& source, const SurfacePoint& target);
+  double funnel();
+  bool contains(std::uint32_t f, std::uint32_t v) const;
+  double corner_angle(std::uint32_t f, std::uint32_t v) const;
+  double total_angle(std::uint32_t v, std::uint32_t f) const;
+  double inside_angle(const Bend& b, std::size_t first, std::size_t last, Point2 prev,
+                      Point2 next) const;
+
+  const SteinerGraph& g_;
+  std::vector<std::uint32_t> strip_, next_strip_, fan_;  // faces of the strip, in order
+  std::vector<Portal> portals_;           // portals_[0] and back(): the source and the target
+  std::vector<Point2> taut_;              // the taut path's points
+  std::vector<std::size_t> taut_portal_;  // the portal each point of taut_ is an end of
+  std::vector<Bend> bends_;
+  std::vector<std::uint32_t> path_, around_, tried_;
+  Stats stats_;
+};
+
+}  // namespace dpts::core

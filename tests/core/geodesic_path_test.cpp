@@ -1,0 +1,230 @@
+// Straightened Steiner paths: exact on surfaces with known geodesics, and against CGAL's exact
+// geodesics on rough terrain.
+#include "core/geodesic_path.hpp"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <functional>
+#include <random>
+
+#include "core/exact_geodesic.hpp"
+#include "core/surface_sampling.hpp"
+#include "support/exact_geodesic.hpp"
+#include "test_support.hpp"
+
+using namespace dpts;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// The grid TIN of z = f(x, y) on a w x h grid of `cell` metre cells from (x0, y0).
+core::TriMesh grid_surface(int w, int h, double cell,
+                           const std::function<double(double, double)>& f, double x0 = 0,
+                           double y0 = 0) {
+  const auto g =
+      test::make_grid(w, h, [&](int c, int r) { return f(x0 + cell * c, y0 - cell * r); });
+  const auto t = core::grid_tin(g);
+  core::TriMesh m;
+  for (auto c : t.cells) {
+    m.xyz.insert(m.xyz.end(), {x0 + cell * (c % w), y0 - cell * (c / w), g.z[c]});
+  }
+  m.faces = t.faces;
+  core::fix_orientation(m);
+  return m;
+}
+
+// Straightened distances from points[i] to every other point (Steiner search, then straightened).
+std::vector<double> straightened(const core::SteinerGraph& g,
+                                 const std::vector<core::SurfacePoint>& pts, std::size_t i,
+                                 core::PathStraightener& s,
+                                 std::vector<double>* steiner = nullptr) {
+  core::GeodesicQuery q(g);
+  std::vector<core::SurfacePoint> targets(pts);
+  targets.erase(targets.begin() + static_cast<std::ptrdiff_t>(i));
+  std::vector<double> d;
+  q.distances(pts[i], targets, d);
+  if (steiner) *steiner = d;
+  for (std::size_t j = 0; j < targets.size(); ++j)
+    d[j] = s.shortest(q, pts[i], j, targets[j], d[j]);
+  return d;
+}
+
+double dist3(const core::SurfacePoint& a, const core::SurfacePoint& b) {
+  return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) +
+                   (a.z - b.z) * (a.z - b.z));
+}
+
+}  // namespace
+
+TEST_CASE("straightened paths on a tilted plane are straight lines", "[core][geodesic][exact]") {
+  // UTM-sized coordinates, and a graph of edges only (delta longer than every edge): the Steiner
+  // path zig-zags along grid edges, the straightened one is the segment.
+  const auto m = grid_surface(
+      15, 12, 30.0, [](double x, double y) { return 0.3 * x - 0.2 * y; }, 500000.0, 4500000.0);
+  const core::SteinerGraph g(m, 1000.0);
+  core::PathStraightener s(g);
+  const auto pts = core::sample_uniform(m, 12, 3);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    std::vector<double> steiner;
+    const auto d = straightened(g, pts, i, s, &steiner);
+    for (std::size_t j = 0, t = 0; j < pts.size(); ++j) {
+      if (j == i) continue;
+      CAPTURE(i, j);
+      CHECK(steiner[t] > dist3(pts[i], pts[j]) * (1 + 1e-4));  // the graph alone is far off
+      CHECK(d[t] == Approx(dist3(pts[i], pts[j])).epsilon(1e-9));
+      ++t;
+    }
+  }
+  CHECK(s.stats().failed == 0);
+}
+
+TEST_CASE("straightened paths over a ridge and a valley are straight when unfolded",
+          "[core][geodesic][exact]") {
+  // z = slope * |x - 150| (a ridge for slope < 0, a valley for slope > 0): unfolded, each side
+  // is a plane of slant factor k, so the geodesic is sqrt((k (|x1 - 150| + |x2 - 150|))^2 + dy^2)
+  // between points on opposite sides, and the segment on one side.
+  for (double slope : {-0.8, 0.6}) {
+    CAPTURE(slope);
+    const auto m =
+        grid_surface(11, 9, 30.0, [&](double x, double) { return slope * std::fabs(x - 150); });
+    const double k = std::sqrt(1 + slope * slope);
+    const core::SteinerGraph g(m, 45.0);
+    core::PathStraightener s(g);
+    const auto pts = core::sample_uniform(m, 14, 5);
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const auto d = straightened(g, pts, i, s);
+      for (std::size_t j = 0, t = 0; j < pts.size(); ++j) {
+        if (j == i) continue;
+        const double a = pts[i].x - 150, b = pts[j].x - 150, dy = pts[i].y - pts[j].y;
+        const double exact =
+            a * b < 0 ? std::hypot(k * (std::fabs(a) + std::fabs(b)), dy) : dist3(pts[i], pts[j]);
+        CAPTURE(i, j, pts[i].x, pts[j].x);
+        CHECK(d[t++] == Approx(exact).epsilon(1e-9));
+      }
+    }
+    CHECK(s.stats().failed == 0);
+  }
+}
+
+TEST_CASE("straightened paths on a pyramid are straight in its unfolded fan",
+          "[core][geodesic][exact]") {
+  // A 16-sided pyramid (a polyhedral cone): its lateral faces unfold around the apex into a
+  // fan of total angle B < 2 pi; between points at slant distances r1, r2 and unfolded angle
+  // D apart, the geodesic is sqrt(r1^2 + r2^2 - 2 r1 r2 cos(min(D, B - D))).
+  const int n = 16;
+  const double radius = 100, height = 70;
+  core::TriMesh m;
+  m.xyz = {0, 0, height};
+  for (int i = 0; i < n; ++i) {
+    m.xyz.insert(m.xyz.end(),
+                 {radius * std::cos(2 * kPi * i / n), radius * std::sin(2 * kPi * i / n), 0});
+  }
+  for (std::uint32_t i = 0; i < n; ++i) m.faces.push_back({0, 1 + i, 1 + (i + 1) % n});
+  // Each face's angle at the apex; a point's unfolded angle is the angles of the faces before
+  // its own plus its angle from the face's first edge.
+  const double slant = std::hypot(radius, height);
+  const double chord = 2 * radius * std::sin(kPi / n);
+  const double beta = 2 * std::asin(chord / (2 * slant));
+  auto polar = [&](const core::SurfacePoint& p) {
+    const double r = std::sqrt(p.x * p.x + p.y * p.y + (p.z - height) * (p.z - height));
+    const auto& f = m.faces[p.face];
+    const double ex = m.xyz[3 * f[1]], ey = m.xyz[3 * f[1] + 1], ez = m.xyz[3 * f[1] + 2] - height;
+    const double cosg = (p.x * ex + p.y * ey + (p.z - height) * ez) / (r * slant);
+    return std::pair<double, double>{r, p.face * beta + std::acos(std::clamp(cosg, -1.0, 1.0))};
+  };
+  const core::SteinerGraph g(m, 20.0);
+  core::PathStraightener s(g);
+  const auto pts = core::sample_uniform(m, 16, 9);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const auto d = straightened(g, pts, i, s);
+    for (std::size_t j = 0, t = 0; j < pts.size(); ++j) {
+      if (j == i) continue;
+      const auto [r1, a1] = polar(pts[i]);
+      const auto [r2, a2] = polar(pts[j]);
+      const double delta = std::fabs(a1 - a2), angle = std::min(delta, n * beta - delta);
+      const double exact = std::sqrt(r1 * r1 + r2 * r2 - 2 * r1 * r2 * std::cos(angle));
+      CAPTURE(i, j);
+      CHECK(d[t++] == Approx(exact).epsilon(1e-9));
+    }
+  }
+  CHECK(s.stats().failed == 0);
+}
+
+TEST_CASE("straightened paths on rough terrain are exact but for a few near ties",
+          "[core][geodesic][exact]") {
+  // Random heights (saddles, peaks and pits everywhere, slopes up to 250 %) at a coarse delta,
+  // against CGAL's exact geodesics: Steiner paths several percent long become exact, but for
+  // pairs with two routes of nearly equal length around some peak, where the Steiner graph may
+  // rank the longer one first: never below the exact distance, never above the Steiner one.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> height(0.0, 25.0);
+  const auto m = grid_surface(16, 14, 10.0, [&](double, double) { return height(rng); });
+  const core::SteinerGraph g(m, 12.0);
+  const core::ExactGeodesics exact_geodesics(m);
+  core::PathStraightener s(g);
+  const auto pts = core::sample_uniform(m, 12, 4);
+  double sum = 0, sum_steiner = 0;
+  std::size_t pairs = 0, exact_pairs = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    std::vector<double> steiner;
+    const auto d = straightened(g, pts, i, s, &steiner);
+    std::vector<core::SurfacePoint> targets(pts);
+    targets.erase(targets.begin() + static_cast<std::ptrdiff_t>(i));
+    const auto exact = exact_geodesics.distances(pts[i], targets);
+    for (std::size_t t = 0; t < targets.size(); ++t) {
+      CAPTURE(i, t);
+      CHECK(d[t] >= exact[t] * (1 - 1e-9));
+      CHECK(d[t] <= steiner[t]);
+      sum += d[t] / exact[t] - 1;
+      sum_steiner += steiner[t] / exact[t] - 1;
+      exact_pairs += d[t] < exact[t] * (1 + 1e-9);
+      ++pairs;
+    }
+  }
+  CAPTURE(sum / pairs, sum_steiner / pairs, exact_pairs, pairs);
+  CHECK(sum_steiner / pairs > 0.02);
+  CHECK(sum / pairs < 0.1 * sum_steiner / pairs);
+  CHECK(exact_pairs > pairs / 2);
+  CHECK(s.stats().failed == 0);
+}
+
+TEST_CASE("print straightened accuracy on real crops", "[.accuracy]") {
+  for (const auto& [file, c0, r0] :
+       {std::tuple<const char*, int, int>{"st_helens_crater.tif", 39, 39},
+        {"san_gabriel_bigtujunga_utm11.tif", 600, 300}}) {
+    const auto m = test::dem_crop(test::shared_data(file), c0, r0, 50);
+    const double edge = core::mean_edge_length(m);
+    const auto pts = core::sample_uniform(m, 24, 7);
+    std::vector<std::vector<double>> exact(pts.size());
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      std::vector<core::SurfacePoint> targets(pts);
+      targets.erase(targets.begin() + static_cast<std::ptrdiff_t>(i));
+      exact[i] = core::ExactGeodesics(m).distances(pts[i], targets);
+    }
+    for (double f : {1.0, 0.25, 0.1}) {
+      const core::SteinerGraph g(m, f * edge);
+      core::PathStraightener s(g);
+      double sum = 0, mx = 0, ssum = 0, smx = 0;
+      std::size_t n = 0, bad = 0, h[5] = {0, 0, 0, 0, 0};
+      for (std::size_t i = 0; i < pts.size(); ++i) {
+        std::vector<double> st;
+        const auto d = straightened(g, pts, i, s, &st);
+        for (std::size_t t = 0; t < d.size(); ++t) {
+          const double e = d[t] / exact[i][t] - 1, se = st[t] / exact[i][t] - 1;
+          sum += e, mx = std::max(mx, e), ssum += se, smx = std::max(smx, se), ++n;
+          if (e > 1e-6) ++bad;
+          for (int b = 0; b < 5; ++b) h[b] += e > std::pow(10.0, -8 + b);
+        }
+      }
+      std::printf(
+          "%s f=%.2f steiner mean %.5f%% max %.4f%% | straight mean %.6f%% max %.5f%% min %.2e bad "
+          "%zu/%zu passes %.2f reroutes %.2f failed %zu\n",
+          file, f, 100 * ssum / n, 100 * smx, 100 * sum / n, 100 * mx, 0.0, bad, n,
+          double(s.stats().passes) / s.stats().paths, double(s.stats().reroutes) / s.stats().paths,
+          s.stats().failed);
+      std::printf("   >1e-8 %zu >1e-7 %zu >1e-6 %zu >1e-5 %zu >1e-4 %zu\n", h[0], h[1], h[2], h[3],
+                  h[4]);
+    }
+  }
+}
