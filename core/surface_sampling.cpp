@@ -15,17 +15,26 @@ double cross2(const double* a, const double* b, const double* c) {
   return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
 }
 
-// Barycentric lift of (x, y) onto face f. note: relative to the first corner, so that large
-// (UTM) coordinates cost no precision in the differences.
+// Face f's corners b, c and the point (x, y) relative to its corner a (so that large UTM
+// coordinates cost no precision in the differences), and twice its signed area in x, y.
+struct Relative {
+  const double *a = nullptr, *b = nullptr, *c = nullptr;
+  double bx = 0, by = 0, cx = 0, cy = 0, px = 0, py = 0, area = 0;
+};
+Relative relative(const TriMesh& m, std::uint32_t f, double x, double y) {
+  Relative r;
+  r.a = &m.xyz[3 * m.faces[f][0]], r.b = &m.xyz[3 * m.faces[f][1]], r.c = &m.xyz[3 * m.faces[f][2]];
+  r.bx = r.b[0] - r.a[0], r.by = r.b[1] - r.a[1], r.cx = r.c[0] - r.a[0], r.cy = r.c[1] - r.a[1];
+  r.px = x - r.a[0], r.py = y - r.a[1];
+  r.area = r.bx * r.cy - r.by * r.cx;
+  return r;
+}
+
+// Barycentric lift of (x, y) onto face f.
 SurfacePoint lift(const TriMesh& m, std::uint32_t f, double x, double y) {
-  const double* a = &m.xyz[3 * m.faces[f][0]];
-  const double* b = &m.xyz[3 * m.faces[f][1]];
-  const double* c = &m.xyz[3 * m.faces[f][2]];
-  const double bx = b[0] - a[0], by = b[1] - a[1], cx = c[0] - a[0], cy = c[1] - a[1];
-  const double px = x - a[0], py = y - a[1];
-  const double area = bx * cy - by * cx;
-  const double lb = (px * cy - py * cx) / area, lc = (bx * py - by * px) / area;
-  return {x, y, a[2] + lb * (b[2] - a[2]) + lc * (c[2] - a[2]), f};
+  const Relative r = relative(m, f, x, y);
+  const double lb = (r.px * r.cy - r.py * r.cx) / r.area, lc = (r.bx * r.py - r.by * r.px) / r.area;
+  return {x, y, r.a[2] + lb * (r.b[2] - r.a[2]) + lc * (r.c[2] - r.a[2]), f};
 }
 
 // Whether (x, y) lies in face f, its edges included: each edge's orientation test computed
@@ -35,12 +44,9 @@ SurfacePoint lift(const TriMesh& m, std::uint32_t f, double x, double y) {
 // nothing: its points lie on its neighbours, and it cannot lift them.
 enum class Inside { no, yes, degenerate };
 Inside contains(const TriMesh& m, std::uint32_t f, double x, double y) {
-  const double* a = &m.xyz[3 * m.faces[f][0]];
-  const double* b = &m.xyz[3 * m.faces[f][1]];
-  const double* c = &m.xyz[3 * m.faces[f][2]];
-  const double bx = b[0] - a[0], by = b[1] - a[1], cx = c[0] - a[0], cy = c[1] - a[1];
-  const double px = x - a[0], py = y - a[1];
-  const double area = bx * cy - by * cx;
+  const Relative r = relative(m, f, x, y);
+  const double *a = r.a, bx = r.bx, by = r.by, cx = r.cx, cy = r.cy, px = r.px, py = r.py;
+  const double area = r.area;
   constexpr double kEps = std::numeric_limits<double>::epsilon();
   const double magnitude = std::max({std::fabs(a[0]), std::fabs(a[1]), std::fabs(x), std::fabs(y)});
   const double size = std::max({std::fabs(bx), std::fabs(by), std::fabs(cx), std::fabs(cy)});
