@@ -5,9 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#ifdef DPTS_TRACE_GEODESIC
-#include <cstdio>
-#endif
 
 namespace dpts::core {
 namespace {
@@ -248,13 +245,11 @@ double PathStraightener::funnel() {
   };
   auto same = [](Point2 a, Point2 b) { return a.x == b.x && a.y == b.y; };
   taut_.assign(1, portals_[0].l);
-  taut_portal_.assign(1, 0);
   bends_.clear();
   Point2 apex = portals_[0].l, left = apex, right = apex;
   std::size_t left_i = 0, right_i = 0;
   auto bend = [&](Point2 p, std::size_t i, std::uint32_t vertex) {
     taut_.push_back(p);
-    taut_portal_.push_back(i);
     bends_.push_back({vertex, i});
     apex = left = right = p;
     left_i = right_i = i;
@@ -286,7 +281,6 @@ double PathStraightener::funnel() {
     }
   }
   taut_.push_back(portals_.back().l);
-  taut_portal_.push_back(portals_.size() - 1);
   double len = 0;
   for (std::size_t i = 1; i < taut_.size(); ++i) {
     len += std::hypot(taut_[i].x - taut_[i - 1].x, taut_[i].y - taut_[i - 1].y);
@@ -349,10 +343,6 @@ double PathStraightener::length(const SurfacePoint& source, const std::vector<st
       const double total = total_angle(b.vertex, strip_[first]);
       if (total < 0) continue;  // on the outline: nothing on the other side
       const double inside = inside_angle(b, first, last, taut_[k], taut_[k + 2]);
-#ifdef DPTS_TRACE_GEODESIC
-      std::fprintf(stderr, "bend v %u portal %zu run [%zu,%zu] of %zu total %.4f inside %.4f\n",
-                   b.vertex, b.portal, first, last, strip_.size(), total, inside);
-#endif
       if (!(total - inside < kPi - 1e-9)) continue;
       const std::size_t begin = fans.size();
       if (!walk_around(b.vertex, strip_[first], strip_[last], false, strip_[first + 1], fan_)) {

@@ -79,7 +79,6 @@ class PathStraightener {
   std::vector<std::uint32_t> strip_, next_strip_, fan_;  // faces of the strip, in order
   std::vector<Portal> portals_;           // portals_[0] and back(): the source and the target
   std::vector<Point2> taut_;              // the taut path's points
-  std::vector<std::size_t> taut_portal_;  // the portal each point of taut_ is an end of
   std::vector<Bend> bends_;
   std::vector<std::uint32_t> path_, around_, tried_;
   Stats stats_;
