@@ -373,7 +373,7 @@ double PathStraightener::shortest(const GeodesicQuery& query, const SurfacePoint
                                   std::size_t target, const SurfacePoint& target_point,
                                   double steiner_distance) {
   if (!std::isfinite(steiner_distance)) return steiner_distance;
-  double best = steiner_distance;
+  double best = std::numeric_limits<double>::infinity();
   query.path(target, path_);
   const double direct = length(source, path_, target_point);
   if (direct >= 0) best = std::min(best, direct);
@@ -397,7 +397,9 @@ double PathStraightener::shortest(const GeodesicQuery& query, const SurfacePoint
     const double len = length(source, path_, target_point);
     if (len >= 0) best = std::min(best, len);
   }
-  return best;
+  // note: the straightened lengths, not the search's (an anchored search rounds its anchors
+  // to floats, so its distance may sit a hair below the path it stands for).
+  return std::isfinite(best) ? best : steiner_distance;
 }
 
 }  // namespace dpts::core

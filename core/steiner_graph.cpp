@@ -229,8 +229,7 @@ void LabelHeap::sift_up(std::size_t i, Entry e) {
   label_[e.node].slot = static_cast<std::uint32_t>(i + 1);
 }
 
-void LabelHeap::decrease(std::uint32_t node, double key, std::uint32_t tag,
-                         std::uint32_t pred) {
+void LabelHeap::decrease(std::uint32_t node, double key, std::uint32_t tag, std::uint32_t pred) {
   Label& l = label_[node];
   l.dist = key;
   l.pred = pred;
@@ -293,9 +292,7 @@ std::size_t BucketQueue::ring_size(const SteinerGraph& graph) {
 }
 
 BucketQueue::BucketQueue(const SteinerGraph& graph)
-    : per_width_(1 / bucket_width(graph)),
-      ring_(ring_size(graph)),
-      mask_(ring_.size() - 1) {}
+    : per_width_(1 / bucket_width(graph)), ring_(ring_size(graph)), mask_(ring_.size() - 1) {}
 
 void BucketQueue::reset(std::size_t nodes) {
   for (auto& b : ring_) b.clear();
@@ -334,11 +331,12 @@ GeodesicQuery::GeodesicQuery(const SteinerGraph& graph, bool use_buckets)
   }
 }
 
-std::size_t GeodesicQuery::estimate_bytes(std::size_t nodes, std::size_t faces,
-                                          std::size_t targets) {
+std::size_t GeodesicQuery::estimate_bytes(std::size_t nodes, std::size_t faces, std::size_t targets,
+                                          bool anchored) {
   // note: the buckets hold the queued nodes (the search's frontier, far fewer than the nodes);
   // an eighth of a label per node bounds them on the meshes measured.
-  return (nodes + targets) * 16 + nodes * 2 + faces * 4 + faces / 8 + targets * 16;
+  return (nodes + targets) * 16 + nodes * 2 + faces * 4 + faces / 8 + targets * 16 +
+         (anchored ? nodes * sizeof(Anchor) : 0);
 }
 
 void GeodesicQuery::distances(const SurfacePoint& source, const std::vector<SurfacePoint>& targets,
@@ -363,11 +361,70 @@ void GeodesicQuery::search(const SurfacePoint& source, const std::vector<Surface
                            double radius, double shell_from,
                            std::vector<std::pair<std::uint32_t, double>>* shell,
                            std::vector<double>& out, std::size_t required) {
-  if (buckets_) {
+  if (anchored_) {
+    if (buckets_) {
+      run_anchored(*buckets_, source, targets, radius, shell_from, shell, out, required);
+    } else {
+      run_anchored(heap_, source, targets, radius, shell_from, shell, out, required);
+    }
+  } else if (buckets_) {
     run(*buckets_, source, targets, radius, shell_from, shell, out, required);
   } else {
     run(heap_, source, targets, radius, shell_from, shell, out, required);
   }
+}
+
+void GeodesicQuery::index_targets(const std::vector<SurfacePoint>& targets) {
+  target_next_.assign(targets.size(), -1);
+  target_done_.assign(targets.size(), 0);
+  target_faces_.assign((g_.mesh().faces.size() + 63) / 64, 0);
+  for (std::size_t j = 0; j < targets.size(); ++j) {
+    target_faces_[targets[j].face >> 6] |= std::uint64_t{1} << (targets[j].face & 63);
+    target_next_[j] = face_target_head_[targets[j].face];
+    face_target_head_[targets[j].face] = static_cast<std::int32_t>(j);
+  }
+}
+
+template <typename Queue>
+void GeodesicQuery::settle_target(Queue& queue, std::size_t j, std::size_t required,
+                                  std::size_t& remaining) {
+  // note: a target's last segment may be shorter than the bucket width, so another node of
+  // this bucket may still lower it: it stays open for that, counted once.
+  queue.reopen(static_cast<std::uint32_t>(g_.node_count() + j));
+  if (!target_done_[j]) {
+    target_done_[j] = 1;
+    if (j < required && --remaining == 0) queue.finish();
+  }
+}
+
+template <typename Queue>
+void GeodesicQuery::prefetch_ahead(const Queue& queue) const {
+  // The next node to settle, most likely: its records load while this one relaxes.
+  // note: in a bucket the order is known several nodes ahead: their labels and positions are
+  // fetched three nodes ahead, their edge or corner records (found through the position
+  // record) and anchor one ahead.
+  const std::size_t n = g_.node_count();
+  const std::uint32_t next = queue.next_hint(0);
+  if (next < n) {
+    g_.prefetch(next);
+    if (anchored_) __builtin_prefetch(&anchors_[next]);
+  }
+  const std::uint32_t later = queue.next_hint(3);
+  if (later < n) {
+    g_.prefetch_position(later);
+    queue.prefetch_label(later);
+  }
+}
+
+template <typename Queue>
+void GeodesicQuery::collect_targets(const Queue& queue, const std::vector<SurfacePoint>& targets,
+                                    std::vector<double>& out) {
+  // note: a target not settled (search bounded by a radius, or unreachable) stays at infinity.
+  const std::size_t n = g_.node_count();
+  for (std::size_t j = 0; j < targets.size(); ++j) {
+    if (target_done_[j]) out[j] = std::fabs(queue.dist(static_cast<std::uint32_t>(n + j)));
+  }
+  for (const auto& t : targets) face_target_head_[t.face] = -1;
 }
 
 template <typename Queue>
@@ -378,14 +435,7 @@ void GeodesicQuery::run(Queue& queue, const SurfacePoint& source,
   const double inf = std::numeric_limits<double>::infinity();
   const std::size_t n = g_.node_count();
   // Targets are extra nodes n + j, reached from their face's boundary nodes.
-  target_next_.assign(targets.size(), -1);
-  target_done_.assign(targets.size(), 0);
-  target_faces_.assign((g_.mesh().faces.size() + 63) / 64, 0);
-  for (std::size_t j = 0; j < targets.size(); ++j) {
-    target_faces_[targets[j].face >> 6] |= std::uint64_t{1} << (targets[j].face & 63);
-    target_next_[j] = face_target_head_[targets[j].face];
-    face_target_head_[targets[j].face] = static_cast<std::int32_t>(j);
-  }
+  index_targets(targets);
   queue.reset(n + targets.size());
   const double src[3] = {source.x, source.y, source.z};
   // Relaxes from a point p at distance d into face f: its boundary nodes and its targets.
@@ -423,26 +473,10 @@ void GeodesicQuery::run(Queue& queue, const SurfacePoint& source,
     const double d = top.key;
     const std::uint32_t u = top.node;
     if (u >= n) {
-      // note: a target's last segment may be shorter than the bucket width, so another node of
-      // this bucket may still lower it: it stays open for that, counted once.
-      queue.reopen(u);
-      if (!target_done_[u - n]) {
-        target_done_[u - n] = 1;
-        if (u - n < required && --remaining == 0) queue.finish();
-      }
+      settle_target(queue, u - n, required, remaining);
       continue;
     }
-    // The next node to settle, most likely: its records load while this one relaxes.
-    // note: in a bucket the order is known several nodes ahead: their labels and positions are
-    // fetched three nodes ahead, their edge or corner records (found through the position
-    // record) one ahead.
-    const std::uint32_t next = queue.next_hint(0);
-    if (next < n) g_.prefetch(next);
-    const std::uint32_t later = queue.next_hint(3);
-    if (later < n) {
-      g_.prefetch_position(later);
-      queue.prefetch_label(later);
-    }
+    prefetch_ahead(queue);
     ++settled_;
     if (d > radius) queue.finish();  // this one is settled too: it only ends the search sooner
     if (shell && d > shell_from) shell->emplace_back(u, d);
@@ -452,11 +486,280 @@ void GeodesicQuery::run(Queue& queue, const SurfacePoint& source,
         [&](std::uint32_t v, std::uint32_t via) { relax(v, p, g_.position(v), d, via, u); },
         [&](std::uint32_t f) { relax_targets(f, p, d, u); });
   }
-  // note: a target not settled (search bounded by a radius, or unreachable) stays at infinity.
-  for (std::size_t j = 0; j < targets.size(); ++j) {
-    if (target_done_[j]) out[j] = std::fabs(queue.dist(static_cast<std::uint32_t>(n + j)));
+  collect_targets(queue, targets, out);
+}
+
+// The anchored search: Dijkstra on the same graph, where a label is a straight segment from an
+// anchor point (the source, a vertex, or the node where the path last bent) unfolded across the
+// faces crossed so far, as in any-angle path planning (Theta*: Nash, Daniel, Koenig and Felner,
+// "Theta*: any-angle path planning on grids", AAAI 2007) carried onto a surface with the window
+// of Chen and Han ("Shortest paths on a polyhedron", SoCG 1990): each label keeps the part of
+// its node's edge the anchor sees through every edge crossed, and a node beyond sees the anchor
+// exactly when its segment from the anchor passes through that part. One label per node (the
+// shortest), so a window another label would have carried is lost and the path bends at a
+// graph node there instead: the distances are those of real surface paths, much nearer the
+// geodesic than the graph's own (which bend at every edge), so far fewer Steiner points find the
+// shortest route among near ties; the path is then pulled taut exactly (geodesic_path.hpp).
+template <typename Queue>
+void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
+                                 const std::vector<SurfacePoint>& targets, double radius,
+                                 double shell_from,
+                                 std::vector<std::pair<std::uint32_t, double>>* shell,
+                                 std::vector<double>& out, std::size_t required) {
+  struct P3 {
+    double x, y, z;
+  };
+  auto pt = [](const double* p) { return P3{p[0], p[1], p[2]}; };
+  auto sub = [](P3 a, P3 b) { return P3{a.x - b.x, a.y - b.y, a.z - b.z}; };
+  auto dot = [](P3 a, P3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; };
+  auto norm = [&](P3 a) { return std::sqrt(dot(a, a)); };
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::size_t n = g_.node_count();
+  const std::uint32_t nv = static_cast<std::uint32_t>(g_.mesh().vertex_count());
+  if (anchors_.size() != n) anchors_.resize(n);
+  index_targets(targets);
+  queue.reset(n + targets.size());
+  constexpr float kNoWindow = 1.0f, kNoWindowHi = 0.0f;  // lo > hi: no anchor
+  const float kWholeEdge = std::numeric_limits<float>::infinity();
+  // Node v (at v3) bends: its anchor is point a at distance da, seen through v's whole edge.
+  auto set_anchor = [&](std::uint32_t v, P3 v3, P3 a, double da) {
+    Anchor& an = anchors_[v];
+    if (v < nv) {
+      an.lo = kNoWindow;
+      an.hi = kNoWindowHi;
+      return;
+    }
+    an.dist = da;
+    an.off[0] = static_cast<float>(a.x - v3.x);
+    an.off[1] = static_cast<float>(a.y - v3.y);
+    an.off[2] = static_cast<float>(a.z - v3.z);
+    an.lo = 0.0f;
+    an.hi = kWholeEdge;
+  };
+  auto improve = [&](std::uint32_t v, double nd, std::uint32_t via, std::uint32_t from) {
+    const double old = queue.dist(v);
+    if (!(nd < old) || queue.settled_dist(v) < inf) return false;
+    if (old == inf && v < n) g_.prefetch(v);
+    queue.decrease(v, nd, via, from);
+    return true;
+  };
+  // Relaxing across a Steiner node's edge (a, b) into face f (corner o): a frame in f's plane
+  // (origin a, ex along the edge, ny towards o), o at (so, yo), the anchor unfolded to
+  // (sa, -h) (h > 0: behind the edge), and its window [lo, hi] on the edge.
+  struct Crossing {
+    P3 a, ex, ny, anchor;
+    std::uint32_t ia = 0, ib = 0, io = 0;
+    double len = 0, so = 0, yo = 0, ao = 0, bo = 0;
+    double sa = 0, h = 0, da = 0, lo = 0, hi = -1;
+    bool straight = false;
+  } cx;
+  // Sets cx up for node u (a Steiner point, at up) crossing into face f; cx.straight: u has an
+  // anchor behind the edge to carry.
+  auto cross_into = [&](std::uint32_t u, const double* up, std::uint32_t f) {
+    cx.straight = false;
+    const auto ends = g_.node_edge_ends(u);
+    cx.ia = ends[0];
+    cx.ib = ends[1];
+    for (std::uint32_t c : g_.mesh().faces[f]) {
+      if (c != ends[0] && c != ends[1]) cx.io = c;
+    }
+    cx.a = pt(g_.position(ends[0]));
+    const P3 e = sub(pt(g_.position(ends[1])), cx.a);
+    cx.len = norm(e);
+    cx.ex = {e.x / cx.len, e.y / cx.len, e.z / cx.len};
+    const P3 ao = sub(pt(g_.position(cx.io)), cx.a);
+    cx.so = dot(ao, cx.ex);
+    const P3 ny{ao.x - cx.so * cx.ex.x, ao.y - cx.so * cx.ex.y, ao.z - cx.so * cx.ex.z};
+    cx.yo = norm(ny);
+    if (!(cx.yo > 1e-12 * cx.len)) return;
+    cx.ny = {ny.x / cx.yo, ny.y / cx.yo, ny.z / cx.yo};
+    cx.ao = std::hypot(cx.so, cx.yo);
+    cx.bo = std::hypot(cx.so - cx.len, cx.yo);
+    const Anchor& an = anchors_[u];
+    if (!(an.lo <= an.hi)) return;
+    const P3 A{up[0] + an.off[0], up[1] + an.off[1], up[2] + an.off[2]};
+    const P3 r = sub(A, cx.a);
+    cx.sa = dot(r, cx.ex);
+    const P3 perp{r.x - cx.sa * cx.ex.x, r.y - cx.sa * cx.ex.y, r.z - cx.sa * cx.ex.z};
+    cx.h = norm(perp);
+    // note: an anchor on the face's own side (or on the edge's line) does not look through it.
+    if (!(cx.h > 1e-9 * cx.len) || dot(perp, cx.ny) > 0) return;
+    cx.anchor = {cx.a.x + cx.sa * cx.ex.x - cx.h * cx.ny.x,
+                 cx.a.y + cx.sa * cx.ex.y - cx.h * cx.ny.y,
+                 cx.a.z + cx.sa * cx.ex.z - cx.h * cx.ny.z};
+    cx.da = an.dist;
+    const double tol = 1e-7 * cx.len;
+    cx.lo = an.lo - tol;
+    cx.hi = std::min<double>(an.hi, cx.len) + tol;
+    cx.straight = true;
+  };
+  // Where the segment from cx's anchor to the point at (sp, yp) in cx's frame crosses the edge.
+  auto crossing2 = [&](double sp, double yp) { return cx.sa + (sp - cx.sa) * cx.h / (cx.h + yp); };
+  // p in cx's frame, and where its segment from the anchor crosses the edge.
+  auto crossing = [&](P3 p, double& sp, double& yp) {
+    const P3 ap = sub(p, cx.a);
+    sp = dot(ap, cx.ex);
+    yp = std::max(0.0, dot(ap, cx.ny));
+    return crossing2(sp, yp);
+  };
+  // Node v (at v3, at (sv, yv) in cx's frame, a Steiner point on edge (a, o) or (b, o) of the
+  // crossed face) is reached straight from cx's anchor: the part of its edge the anchor sees
+  // through cx's window. note: from the face's corners alone, no other record is read.
+  auto carry = [&](std::uint32_t v, P3 v3, double sv, double yv) {
+    Anchor& an = anchors_[v];
+    if (v < nv) {
+      an.lo = kNoWindow;
+      an.hi = kNoWindowHi;
+      return;
+    }
+    // Its edge: the one v is nearer the line of; its ends in id order (as the graph keeps them).
+    const double off_ao = std::fabs(sv * cx.yo - yv * cx.so) / cx.ao;
+    const double off_bo = std::fabs((sv - cx.len) * cx.yo - yv * (cx.so - cx.len)) / cx.bo;
+    const bool on_ao = off_ao <= off_bo;
+    const std::uint32_t other = on_ao ? cx.ia : cx.ib;
+    const double other_s = on_ao ? 0.0 : cx.len;
+    double s0 = other_s, y0 = 0, s1 = cx.so, y1 = cx.yo;
+    if (cx.io < other) {
+      std::swap(s0, s1);
+      std::swap(y0, y1);
+    }
+    const double len = on_ao ? cx.ao : cx.bo;
+    const double c0 = crossing2(s0, y0), c1 = crossing2(s1, y1);
+    auto solve = [&](double c) {
+      const double den = (s1 - s0) * cx.h - (c - cx.sa) * (y1 - y0);
+      const double t = ((c - cx.sa) * (cx.h + y0) - (s0 - cx.sa) * cx.h) / den;
+      return std::clamp(std::isfinite(t) ? t : 0.0, 0.0, 1.0);
+    };
+    double tlo, thi;
+    if (c0 <= c1) {
+      tlo = cx.lo <= c0 ? 0.0 : cx.lo >= c1 ? 1.0 : solve(cx.lo);
+      thi = cx.hi >= c1 ? 1.0 : cx.hi <= c0 ? 0.0 : solve(cx.hi);
+    } else {
+      tlo = cx.hi >= c0 ? 0.0 : cx.hi <= c1 ? 1.0 : solve(cx.hi);
+      thi = cx.lo <= c1 ? 1.0 : cx.lo >= c0 ? 0.0 : solve(cx.lo);
+    }
+    an.dist = cx.da;
+    an.off[0] = static_cast<float>(cx.anchor.x - v3.x);
+    an.off[1] = static_cast<float>(cx.anchor.y - v3.y);
+    an.off[2] = static_cast<float>(cx.anchor.z - v3.z);
+    an.lo = static_cast<float>(std::min(tlo, thi) * len);
+    an.hi = static_cast<float>(std::max(tlo, thi) * len);
+  };
+  // The distance to point p through cx (or bent at u, at distance d).
+  auto through = [&](const double* up, double d, P3 p) {
+    if (cx.straight) {
+      double sp, yp;
+      const double c = crossing(p, sp, yp);
+      if (c >= cx.lo && c <= cx.hi) return cx.da + norm(sub(p, cx.anchor));
+    }
+    return d + norm(sub(p, pt(up)));
+  };
+  const double src[3] = {source.x, source.y, source.z};
+  const P3 s3 = pt(src);
+  // The source's face: its boundary nodes and targets, straight from the source.
+  g_.face_nodes(source.face, nodes_);
+  for (std::uint32_t v : nodes_) {
+    const P3 v3 = pt(g_.position(v));
+    if (improve(v, norm(sub(v3, s3)), source.face, LabelHeap::kNone)) set_anchor(v, v3, s3, 0.0);
   }
-  for (const auto& t : targets) face_target_head_[t.face] = -1;
+  auto relax_targets = [&](std::uint32_t f, const double* up, double d, std::uint32_t from,
+                           bool use_cx) {
+    if (!(target_faces_[f >> 6] >> (f & 63) & 1)) return;
+    for (std::int32_t j = face_target_head_[f]; j >= 0; j = target_next_[j]) {
+      const P3 q{targets[j].x, targets[j].y, targets[j].z};
+      const double nd = use_cx ? through(up, d, q) : d + norm(sub(q, pt(up)));
+      const auto v = static_cast<std::uint32_t>(n + j);
+      const double old = queue.dist(v);
+      if (nd < old && !target_done_[j]) queue.decrease(v, nd, SteinerGraph::kAnywhere, from);
+    }
+  };
+  relax_targets(source.face, src, 0.0, LabelHeap::kNone, false);
+  std::size_t remaining = required;
+  LabelHeap::Entry top;
+  settled_ = 0;
+  while (queue.pop(top)) {
+    const double d = top.key;
+    const std::uint32_t u = top.node;
+    if (u >= n) {
+      settle_target(queue, u - n, required, remaining);
+      continue;
+    }
+    prefetch_ahead(queue);
+    ++settled_;
+    if (d > radius) queue.finish();
+    if (shell && d > shell_from) shell->emplace_back(u, d);
+    const double* up = g_.position(u);
+    const P3 u3 = pt(up);
+    std::uint32_t face = SteinerGraph::kNoFace;  // the face cx is set up for
+    g_.for_each_neighbour(
+        u, top.tag,
+        [&](std::uint32_t v, std::uint32_t via) {
+          const P3 v3 = pt(g_.position(v));
+          if (via == SteinerGraph::kAlongEdge) {
+            // Along u's own edge: straight from u's anchor where its window holds v.
+            const Anchor& an = anchors_[u];
+            if (u >= nv && an.lo <= an.hi) {
+              const auto ends = g_.node_edge_ends(u);
+              const P3 a = pt(g_.position(ends[0]));
+              const double sv = norm(sub(v3, a));
+              const double tol = 1e-7 * (sv + norm(sub(u3, a)));
+              if (sv >= an.lo - tol && sv <= an.hi + tol) {
+                const P3 A{up[0] + an.off[0], up[1] + an.off[1], up[2] + an.off[2]};
+                if (improve(v, an.dist + norm(sub(v3, A)), via, u) && v >= nv) {
+                  Anchor& av = anchors_[v];
+                  av = an;
+                  av.off[0] = static_cast<float>(A.x - v3.x);
+                  av.off[1] = static_cast<float>(A.y - v3.y);
+                  av.off[2] = static_cast<float>(A.z - v3.z);
+                }
+                return;
+              }
+            }
+            if (improve(v, d + norm(sub(v3, u3)), via, u)) set_anchor(v, v3, u3, d);
+            return;
+          }
+          if (u < nv) {
+            const double old = queue.dist(v);
+            const P3 uv = sub(v3, u3);
+            const double w2 = dot(uv, uv), gap = old - d;
+            if (!(gap > 0) || w2 >= gap * gap) return;
+            if (improve(v, d + std::sqrt(w2), via, u)) set_anchor(v, v3, u3, d);
+            return;
+          }
+          // note: a settled node (negative in the buckets) or one no nearer than the anchor's
+          // straight segment could bring is skipped before any other geometry: the segment
+          // bent at u is never shorter.
+          const double old = queue.dist(v);
+          if (!(old > 0)) return;
+          if (via != face) {
+            cross_into(u, up, via);
+            face = via;
+          }
+          if (cx.straight) {
+            const P3 av = sub(v3, cx.anchor);
+            const double w2 = dot(av, av), gap = old - cx.da;
+            if (!(gap > 0) || w2 >= gap * gap) return;
+            double sp, yp;
+            const double c = crossing(v3, sp, yp);
+            if (c >= cx.lo && c <= cx.hi) {
+              if (improve(v, cx.da + std::sqrt(w2), via, u)) carry(v, v3, sp, yp);
+              return;
+            }
+          }
+          const P3 uv = sub(v3, u3);
+          const double w2 = dot(uv, uv), gap = old - d;
+          if (!(gap > 0) || w2 >= gap * gap) return;
+          if (improve(v, d + std::sqrt(w2), via, u)) set_anchor(v, v3, u3, d);
+        },
+        [&](std::uint32_t f) {
+          if (u >= nv && f != face) {
+            cross_into(u, up, f);
+            face = f;
+          }
+          relax_targets(f, up, d, u, u >= nv);
+        });
+  }
+  collect_targets(queue, targets, out);
 }
 
 void GeodesicQuery::path(std::size_t target, std::vector<std::uint32_t>& nodes) const {

@@ -314,7 +314,9 @@ class GeodesicQuery {
   // The memory (bytes) of one query on a graph of `nodes` nodes over `faces` faces with
   // `targets` targets: its labels (16 bytes per node and target), per-face target lists, and
   // the queue's buckets.
-  static std::size_t estimate_bytes(std::size_t nodes, std::size_t faces, std::size_t targets);
+  // An anchored query (set_anchored) needs sizeof(Anchor) more per node.
+  static std::size_t estimate_bytes(std::size_t nodes, std::size_t faces, std::size_t targets,
+                                    bool anchored = false);
 
   // Distances from source to each target: min over boundary nodes u of the source's face and
   // v of the target's face of |source u| + path(u, v) + |v target| (and the straight segment
@@ -350,6 +352,11 @@ class GeodesicQuery {
   // The same for a graph node the last query settled: the path's nodes, `node` last.
   void path_to_node(std::uint32_t node, std::vector<std::uint32_t>& nodes) const;
 
+  // Searches with straight segments across faces (see run_anchored in steiner_graph.cpp):
+  // distances much nearer the exact geodesics than the graph's own, at a coarser delta.
+  void set_anchored(bool anchored) { anchored_ = anchored; }
+  bool anchored() const { return anchored_; }
+
   // Graph nodes the last query settled (the area it searched).
   std::size_t settled() const { return settled_; }
 
@@ -361,6 +368,23 @@ class GeodesicQuery {
   void search(const SurfacePoint& source, const std::vector<SurfacePoint>& targets, double radius,
               double shell_from, std::vector<std::pair<std::uint32_t, double>>* shell,
               std::vector<double>& out, std::size_t required);
+  // The targets listed by face (face_target_head_, target_next_, target_faces_), none done.
+  void index_targets(const std::vector<SurfacePoint>& targets);
+  // Target j popped: done, the search finished once the first `required` are.
+  template <typename Queue>
+  void settle_target(Queue& queue, std::size_t j, std::size_t required, std::size_t& remaining);
+  // Prefetches the records of the nodes the queue will most likely settle next.
+  template <typename Queue>
+  void prefetch_ahead(const Queue& queue) const;
+  // The done targets' distances into out; the face lists emptied for the next query.
+  template <typename Queue>
+  void collect_targets(const Queue& queue, const std::vector<SurfacePoint>& targets,
+                       std::vector<double>& out);
+  template <typename Queue>
+  void run_anchored(Queue& queue, const SurfacePoint& source,
+                    const std::vector<SurfacePoint>& targets, double radius, double shell_from,
+                    std::vector<std::pair<std::uint32_t, double>>* shell, std::vector<double>& out,
+                    std::size_t required);
   template <typename Queue>
   void run(Queue& queue, const SurfacePoint& source, const std::vector<SurfacePoint>& targets,
            double radius, double shell_from, std::vector<std::pair<std::uint32_t, double>>* shell,
@@ -374,6 +398,17 @@ class GeodesicQuery {
   std::vector<char> target_done_;  // target settled (its distance final once the search ends)
   std::vector<std::uint32_t> nodes_;
   std::size_t settled_ = 0;
+  bool anchored_ = false;
+  // An anchored label: the point its straight segment starts from (offset from the node, in
+  // the plane of the face it came through), that point's distance, and the part of the node's
+  // edge (metres from its first end) the point sees through the faces crossed; lo > hi: none
+  // (the path bends at the node).
+  struct Anchor {
+    double dist;
+    float off[3];
+    float lo, hi;
+  };
+  std::vector<Anchor> anchors_;
 };
 
 }  // namespace dpts::core

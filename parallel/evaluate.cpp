@@ -18,8 +18,8 @@
 #include <utility>
 
 #include "core/errors.hpp"
-#include "core/geodesic_path.hpp"
 #include "core/exact_geodesic.hpp"
+#include "core/geodesic_path.hpp"
 #include "core/surface_sampling.hpp"
 #include "parallel/exact_pairwise.hpp"
 #include "parallel/meta.hpp"
@@ -86,51 +86,51 @@ void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::Su
   struct Scratch {
     core::GeodesicQuery query;
     core::PathStraightener straightener;
-    explicit Scratch(const core::SteinerGraph& g) : query(g), straightener(g) {}
+    Scratch(const core::SteinerGraph& g, bool anchored) : query(g), straightener(g) {
+      query.set_anchored(anchored);
+    }
   };
   tbb::enumerable_thread_specific<std::unique_ptr<Scratch>> scratch;
   // note: grain 1: query costs differ a lot; let the scheduler balance them.
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, k, 1),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      auto& sc = scratch.local();
-                      if (!sc) sc = std::make_unique<Scratch>(graph);
-                      std::vector<core::SurfacePoint> targets;
-                      std::vector<double> d;
-                      for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                        if (assigned[i].empty()) {
-                          if (searched) searched();
-                          continue;
-                        }
-                        // The other needed pairs of i ride along: those the search settles
-                        // before its own are done get a second path, from this side.
-                        targets.clear();
-                        for (std::size_t j : assigned[i]) targets.push_back(points[j]);
-                        const std::size_t own = targets.size();
-                        if (straighten) {
-                          for (std::size_t j : rides[i]) targets.push_back(points[j]);
-                        }
-                        sc->query.distances(points[i], targets, d, own);
-                        settled_by[i] = sc->query.settled();
-                        const auto before = sc->straightener.stats();
-                        for (std::size_t t = 0; t < targets.size(); ++t) {
-                          if (straighten) {
-                            d[t] = sc->straightener.shortest(sc->query, points[i], t, targets[t], d[t]);
-                          }
-                          if (t < own) {
-                            const std::size_t j = assigned[i][t];
-                            out[std::min(i, j) * k + std::max(i, j)] = d[t];
-                          } else {
-                            reverse[i * k + rides[i][t - own]] = d[t];
-                          }
-                        }
-                        const auto& after = sc->straightener.stats();
-                        straightened_by[i] = {after.paths - before.paths,
-                                              after.passes - before.passes,
-                                              after.reroutes - before.reroutes,
-                                              after.failed - before.failed};
-                        if (searched) searched();
-                      }
-                    });
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, k, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+        auto& sc = scratch.local();
+        if (!sc) sc = std::make_unique<Scratch>(graph, straighten);
+        std::vector<core::SurfacePoint> targets;
+        std::vector<double> d;
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+          if (assigned[i].empty()) {
+            if (searched) searched();
+            continue;
+          }
+          // The other needed pairs of i ride along: those the search settles
+          // before its own are done get a second path, from this side.
+          targets.clear();
+          for (std::size_t j : assigned[i]) targets.push_back(points[j]);
+          const std::size_t own = targets.size();
+          if (straighten) {
+            for (std::size_t j : rides[i]) targets.push_back(points[j]);
+          }
+          sc->query.distances(points[i], targets, d, own);
+          settled_by[i] = sc->query.settled();
+          const auto before = sc->straightener.stats();
+          for (std::size_t t = 0; t < targets.size(); ++t) {
+            if (straighten) {
+              d[t] = sc->straightener.shortest(sc->query, points[i], t, targets[t], d[t]);
+            }
+            if (t < own) {
+              const std::size_t j = assigned[i][t];
+              out[std::min(i, j) * k + std::max(i, j)] = d[t];
+            } else {
+              reverse[i * k + rides[i][t - own]] = d[t];
+            }
+          }
+          const auto& after = sc->straightener.stats();
+          straightened_by[i] = {after.paths - before.paths, after.passes - before.passes,
+                                after.reroutes - before.reroutes, after.failed - before.failed};
+          if (searched) searched();
+        }
+      });
   if (straighten) {
     for (std::size_t i = 0; i < k; ++i) {
       for (std::size_t j : rides[i]) {
@@ -423,7 +423,8 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
   // note: straightening needs each pair's path, so it measures one way.
   const PairwiseMethod method = options.straighten ? PairwiseMethod::kOneWay : options.method;
   const bool given = !options.sample_xy.empty();
-  const std::size_t sets = given ? options.sample_xy.size() : static_cast<std::size_t>(options.sets);
+  const std::size_t sets =
+      given ? options.sample_xy.size() : static_cast<std::size_t>(options.sets);
   std::size_t k_max = given ? 0 : static_cast<std::size_t>(options.points);
   for (const auto& set : options.sample_xy) k_max = std::max(k_max, set.size());
   // Sets are named as their user knows them: from 1 when drawn here, by their number in the
@@ -453,7 +454,7 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
     result.graphs_bytes = est_t.bytes + est_s.bytes;
     result.search_bytes = core::GeodesicQuery::estimate_bytes(
         std::max(est_t.nodes, est_s.nodes),
-        std::max(original.faces.size(), simplified.faces.size()), k_max);
+        std::max(original.faces.size(), simplified.faces.size()), k_max, options.straighten);
     if (options.memory_budget_bytes > 0) {
       const std::size_t need = result.graphs_bytes + min_searches(method) * result.search_bytes;
       if (need > options.memory_budget_bytes) {
@@ -555,10 +556,9 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
                        (given ? " points of " : " sample points of ") + set_name(set) +
                        " lie outside the mesh's footprint");
     }
-    const std::string stage_name = given ? set_name(set) + " (" + std::to_string(set + 1) + "/" +
-                                               std::to_string(sets) + ")"
-                                         : "set " + std::to_string(set + 1) + "/" +
-                                               std::to_string(sets);
+    const std::string stage_name =
+        given ? set_name(set) + " (" + std::to_string(set + 1) + "/" + std::to_string(sets) + ")"
+              : "set " + std::to_string(set + 1) + "/" + std::to_string(sets);
     const std::string kind = options.exact ? ": exact geodesics on T" : ": geodesics on T";
     auto t0 = std::chrono::steady_clock::now();
     const std::vector<double> dt = geodesics(stage_name + kind, true, on_t, stats_t);

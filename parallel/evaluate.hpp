@@ -27,11 +27,12 @@ enum class PairwiseMethod {
 // How pairwise_distances works, and whom it tells of its progress.
 struct PairwiseOptions {
   PairwiseMethod method = PairwiseMethod::kMeet;
-  // Each pair's Steiner path pulled taut into a locally shortest geodesic
-  // (core::PathStraightener): exact but for the rare pair whose Steiner path went around the
-  // wrong side of some hill. Needs the paths, so the pairs are measured one way (method is not
-  // used). false: the paper's Steiner distances, a few tenths of a percent to several percent
-  // long depending on delta.
+  // Each pair searched with straight segments across faces (GeodesicQuery::set_anchored),
+  // then its path pulled taut into a locally shortest geodesic (core::PathStraightener):
+  // exact but for the rare pair whose search still took the longer of two routes nearly equal
+  // in length. Needs the paths, so the pairs are measured one way (method is not used). false:
+  // the paper's Steiner distances, a few tenths of a percent to several percent long
+  // depending on delta.
   bool straighten = true;
   // At most this many queries (each with its labels for every node) exist at once, fewer
   // threads working if need be (0: no bound; at least min_searches(method) must be allowed);
