@@ -427,6 +427,30 @@ void GeodesicQuery::collect_targets(const Queue& queue, const std::vector<Surfac
   for (const auto& t : targets) face_target_head_[t.face] = -1;
 }
 
+template <typename Queue, typename Relax>
+void GeodesicQuery::settle(Queue& queue, double radius, double shell_from,
+                           std::vector<std::pair<std::uint32_t, double>>* shell,
+                           std::size_t required, Relax&& relax) {
+  const std::size_t n = g_.node_count();
+  std::size_t remaining = required;
+  LabelHeap::Entry top;
+  settled_ = 0;
+  while (queue.pop(top)) {
+    const double d = top.key;
+    const std::uint32_t u = top.node;
+    if (u >= n) {
+      settle_target(queue, u - n, required, remaining);
+      continue;
+    }
+    prefetch_ahead(queue);
+    ++settled_;
+    // note: a node past the radius is settled too: it only ends the search sooner.
+    if (d > radius) queue.finish();
+    if (shell && d > shell_from) shell->emplace_back(u, d);
+    relax(u, d, top.tag);
+  }
+}
+
 template <typename Queue>
 void GeodesicQuery::run(Queue& queue, const SurfacePoint& source,
                         const std::vector<SurfacePoint>& targets, double radius, double shell_from,
@@ -466,26 +490,14 @@ void GeodesicQuery::run(Queue& queue, const SurfacePoint& source,
   g_.face_nodes(source.face, nodes_);
   for (std::uint32_t v : nodes_) relax(v, src, g_.position(v), 0.0, source.face, LabelHeap::kNone);
   relax_targets(source.face, src, 0.0, LabelHeap::kNone);
-  std::size_t remaining = required;
-  LabelHeap::Entry top;
-  settled_ = 0;
-  while (queue.pop(top)) {
-    const double d = top.key;
-    const std::uint32_t u = top.node;
-    if (u >= n) {
-      settle_target(queue, u - n, required, remaining);
-      continue;
-    }
-    prefetch_ahead(queue);
-    ++settled_;
-    if (d > radius) queue.finish();  // this one is settled too: it only ends the search sooner
-    if (shell && d > shell_from) shell->emplace_back(u, d);
-    const double* p = g_.position(u);
-    g_.for_each_neighbour(
-        u, top.tag,
-        [&](std::uint32_t v, std::uint32_t via) { relax(v, p, g_.position(v), d, via, u); },
-        [&](std::uint32_t f) { relax_targets(f, p, d, u); });
-  }
+  settle(queue, radius, shell_from, shell, required,
+         [&](std::uint32_t u, double d, std::uint32_t tag) {
+           const double* p = g_.position(u);
+           g_.for_each_neighbour(
+               u, tag,
+               [&](std::uint32_t v, std::uint32_t via) { relax(v, p, g_.position(v), d, via, u); },
+               [&](std::uint32_t f) { relax_targets(f, p, d, u); });
+         });
   collect_targets(queue, targets, out);
 }
 
@@ -519,20 +531,30 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
   if (anchors_.size() != n) anchors_.resize(n);
   index_targets(targets);
   queue.reset(n + targets.size());
-  constexpr float kNoWindow = 1.0f, kNoWindowHi = 0.0f;  // lo > hi: no anchor
   const float kWholeEdge = std::numeric_limits<float>::infinity();
-  // Node v (at v3) bends: its anchor is point a at distance da, seen through v's whole edge.
-  auto set_anchor = [&](std::uint32_t v, P3 v3, P3 a, double da) {
-    Anchor& an = anchors_[v];
-    if (v < nv) {
-      an.lo = kNoWindow;
-      an.hi = kNoWindowHi;
-      return;
-    }
+  // A vertex has no anchor (lo > hi): a path through it bends there.
+  auto no_anchor = [](Anchor& an) {
+    an.lo = 1.0f;
+    an.hi = 0.0f;
+  };
+  auto has_anchor = [](const Anchor& an) { return an.lo <= an.hi; };
+  // Node v (at v3) gets anchor point a at distance da (offsets from v).
+  auto place = [](Anchor& an, P3 v3, P3 a, double da) {
     an.dist = da;
     an.off[0] = static_cast<float>(a.x - v3.x);
     an.off[1] = static_cast<float>(a.y - v3.y);
     an.off[2] = static_cast<float>(a.z - v3.z);
+  };
+  // The anchor point of node u (at up).
+  auto anchor_of = [&](std::uint32_t u, const double* up) {
+    const Anchor& an = anchors_[u];
+    return P3{up[0] + an.off[0], up[1] + an.off[1], up[2] + an.off[2]};
+  };
+  // Node v (at v3) bends: its anchor is point a at distance da, seen through v's whole edge.
+  auto set_anchor = [&](std::uint32_t v, P3 v3, P3 a, double da) {
+    Anchor& an = anchors_[v];
+    if (v < nv) return no_anchor(an);
+    place(an, v3, a, da);
     an.lo = 0.0f;
     an.hi = kWholeEdge;
   };
@@ -576,9 +598,8 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
     cx.ao = std::hypot(cx.so, cx.yo);
     cx.bo = std::hypot(cx.so - cx.len, cx.yo);
     const Anchor& an = anchors_[u];
-    if (!(an.lo <= an.hi)) return;
-    const P3 A{up[0] + an.off[0], up[1] + an.off[1], up[2] + an.off[2]};
-    const P3 r = sub(A, cx.a);
+    if (!has_anchor(an)) return;
+    const P3 r = sub(anchor_of(u, up), cx.a);
     cx.sa = dot(r, cx.ex);
     const P3 perp{r.x - cx.sa * cx.ex.x, r.y - cx.sa * cx.ex.y, r.z - cx.sa * cx.ex.z};
     cx.h = norm(perp);
@@ -607,11 +628,7 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
   // through cx's window. note: from the face's corners alone, no other record is read.
   auto carry = [&](std::uint32_t v, P3 v3, double sv, double yv) {
     Anchor& an = anchors_[v];
-    if (v < nv) {
-      an.lo = kNoWindow;
-      an.hi = kNoWindowHi;
-      return;
-    }
+    if (v < nv) return no_anchor(an);
     // Its edge: the one v is nearer the line of; its ends in id order (as the graph keeps them).
     const double off_ao = std::fabs(sv * cx.yo - yv * cx.so) / cx.ao;
     const double off_bo = std::fabs((sv - cx.len) * cx.yo - yv * (cx.so - cx.len)) / cx.bo;
@@ -638,10 +655,7 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
       tlo = cx.hi >= c0 ? 0.0 : cx.hi <= c1 ? 1.0 : solve(cx.hi);
       thi = cx.lo <= c1 ? 1.0 : cx.lo >= c0 ? 0.0 : solve(cx.lo);
     }
-    an.dist = cx.da;
-    an.off[0] = static_cast<float>(cx.anchor.x - v3.x);
-    an.off[1] = static_cast<float>(cx.anchor.y - v3.y);
-    an.off[2] = static_cast<float>(cx.anchor.z - v3.z);
+    place(an, v3, cx.anchor, cx.da);
     an.lo = static_cast<float>(std::min(tlo, thi) * len);
     an.hi = static_cast<float>(std::max(tlo, thi) * len);
   };
@@ -662,103 +676,87 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
     const P3 v3 = pt(g_.position(v));
     if (improve(v, norm(sub(v3, s3)), source.face, LabelHeap::kNone)) set_anchor(v, v3, s3, 0.0);
   }
-  auto relax_targets = [&](std::uint32_t f, const double* up, double d, std::uint32_t from,
-                           bool use_cx) {
+  // note: through cx where it is set up for f (a Steiner node's crossing), else bent at up.
+  auto relax_targets = [&](std::uint32_t f, const double* up, double d, std::uint32_t from) {
     if (!(target_faces_[f >> 6] >> (f & 63) & 1)) return;
     for (std::int32_t j = face_target_head_[f]; j >= 0; j = target_next_[j]) {
       const P3 q{targets[j].x, targets[j].y, targets[j].z};
-      const double nd = use_cx ? through(up, d, q) : d + norm(sub(q, pt(up)));
+      const double nd = through(up, d, q);
       const auto v = static_cast<std::uint32_t>(n + j);
       const double old = queue.dist(v);
       if (nd < old && !target_done_[j]) queue.decrease(v, nd, SteinerGraph::kAnywhere, from);
     }
   };
-  relax_targets(source.face, src, 0.0, LabelHeap::kNone, false);
-  std::size_t remaining = required;
-  LabelHeap::Entry top;
-  settled_ = 0;
-  while (queue.pop(top)) {
-    const double d = top.key;
-    const std::uint32_t u = top.node;
-    if (u >= n) {
-      settle_target(queue, u - n, required, remaining);
-      continue;
-    }
-    prefetch_ahead(queue);
-    ++settled_;
-    if (d > radius) queue.finish();
-    if (shell && d > shell_from) shell->emplace_back(u, d);
-    const double* up = g_.position(u);
-    const P3 u3 = pt(up);
-    std::uint32_t face = SteinerGraph::kNoFace;  // the face cx is set up for
-    g_.for_each_neighbour(
-        u, top.tag,
-        [&](std::uint32_t v, std::uint32_t via) {
-          const P3 v3 = pt(g_.position(v));
-          if (via == SteinerGraph::kAlongEdge) {
-            // Along u's own edge: straight from u's anchor where its window holds v.
-            const Anchor& an = anchors_[u];
-            if (u >= nv && an.lo <= an.hi) {
-              const auto ends = g_.node_edge_ends(u);
-              const P3 a = pt(g_.position(ends[0]));
-              const double sv = norm(sub(v3, a));
-              const double tol = 1e-7 * (sv + norm(sub(u3, a)));
-              if (sv >= an.lo - tol && sv <= an.hi + tol) {
-                const P3 A{up[0] + an.off[0], up[1] + an.off[1], up[2] + an.off[2]};
-                if (improve(v, an.dist + norm(sub(v3, A)), via, u) && v >= nv) {
-                  Anchor& av = anchors_[v];
-                  av = an;
-                  av.off[0] = static_cast<float>(A.x - v3.x);
-                  av.off[1] = static_cast<float>(A.y - v3.y);
-                  av.off[2] = static_cast<float>(A.z - v3.z);
-                }
-                return;
-              }
-            }
-            if (improve(v, d + norm(sub(v3, u3)), via, u)) set_anchor(v, v3, u3, d);
-            return;
-          }
-          if (u < nv) {
-            const double old = queue.dist(v);
-            const P3 uv = sub(v3, u3);
-            const double w2 = dot(uv, uv), gap = old - d;
-            if (!(gap > 0) || w2 >= gap * gap) return;
-            if (improve(v, d + std::sqrt(w2), via, u)) set_anchor(v, v3, u3, d);
-            return;
-          }
-          // note: a settled node (negative in the buckets) or one no nearer than the anchor's
-          // straight segment could bring is skipped before any other geometry: the segment
-          // bent at u is never shorter.
-          const double old = queue.dist(v);
-          if (!(old > 0)) return;
-          if (via != face) {
-            cross_into(u, up, via);
-            face = via;
-          }
-          if (cx.straight) {
-            const P3 av = sub(v3, cx.anchor);
-            const double w2 = dot(av, av), gap = old - cx.da;
-            if (!(gap > 0) || w2 >= gap * gap) return;
-            double sp, yp;
-            const double c = crossing(v3, sp, yp);
-            if (c >= cx.lo && c <= cx.hi) {
-              if (improve(v, cx.da + std::sqrt(w2), via, u)) carry(v, v3, sp, yp);
-              return;
-            }
-          }
-          const P3 uv = sub(v3, u3);
-          const double w2 = dot(uv, uv), gap = old - d;
-          if (!(gap > 0) || w2 >= gap * gap) return;
-          if (improve(v, d + std::sqrt(w2), via, u)) set_anchor(v, v3, u3, d);
-        },
-        [&](std::uint32_t f) {
-          if (u >= nv && f != face) {
-            cross_into(u, up, f);
-            face = f;
-          }
-          relax_targets(f, up, d, u, u >= nv);
-        });
-  }
+  relax_targets(source.face, src, 0.0, LabelHeap::kNone);
+  settle(queue, radius, shell_from, shell, required,
+         [&](std::uint32_t u, double d, std::uint32_t tag) {
+           const double* up = g_.position(u);
+           const P3 u3 = pt(up);
+           std::uint32_t face = SteinerGraph::kNoFace;  // the face cx is set up for
+           cx.straight = false;
+           // v (at v3, tentatively at old) bent at u: straight from u, which becomes v's anchor.
+           // note: comparing squares first skips the square root where v cannot improve.
+           auto bent = [&](std::uint32_t v, P3 v3, double old, std::uint32_t via) {
+             const P3 uv = sub(v3, u3);
+             const double w2 = dot(uv, uv), gap = old - d;
+             if (!(gap > 0) || w2 >= gap * gap) return;
+             if (improve(v, d + std::sqrt(w2), via, u)) set_anchor(v, v3, u3, d);
+           };
+           g_.for_each_neighbour(
+               u, tag,
+               [&](std::uint32_t v, std::uint32_t via) {
+                 const P3 v3 = pt(g_.position(v));
+                 const double old = queue.dist(v);
+                 if (via == SteinerGraph::kAlongEdge) {
+                   // Along u's own edge: straight from u's anchor where its window holds v.
+                   const Anchor& an = anchors_[u];
+                   if (u >= nv && has_anchor(an)) {
+                     const auto ends = g_.node_edge_ends(u);
+                     const P3 a = pt(g_.position(ends[0]));
+                     const double sv = norm(sub(v3, a));
+                     const double tol = 1e-7 * (sv + norm(sub(u3, a)));
+                     if (sv >= an.lo - tol && sv <= an.hi + tol) {
+                       const P3 A = anchor_of(u, up);
+                       if (improve(v, an.dist + norm(sub(v3, A)), via, u) && v >= nv) {
+                         Anchor& av = anchors_[v];
+                         av = an;
+                         place(av, v3, A, an.dist);
+                       }
+                       return;
+                     }
+                   }
+                   return bent(v, v3, old, via);
+                 }
+                 if (u < nv) return bent(v, v3, old, via);
+                 // note: a settled node (negative in the buckets) or one no nearer than the
+                 // anchor's straight segment could bring is skipped before any other geometry: the
+                 // segment bent at u is never shorter.
+                 if (!(old > 0)) return;
+                 if (via != face) {
+                   cross_into(u, up, via);
+                   face = via;
+                 }
+                 if (cx.straight) {
+                   const P3 av = sub(v3, cx.anchor);
+                   const double w2 = dot(av, av), gap = old - cx.da;
+                   if (!(gap > 0) || w2 >= gap * gap) return;
+                   double sp, yp;
+                   const double c = crossing(v3, sp, yp);
+                   if (c >= cx.lo && c <= cx.hi) {
+                     if (improve(v, cx.da + std::sqrt(w2), via, u)) carry(v, v3, sp, yp);
+                     return;
+                   }
+                 }
+                 bent(v, v3, old, via);
+               },
+               [&](std::uint32_t f) {
+                 if (u >= nv && f != face) {
+                   cross_into(u, up, f);
+                   face = f;
+                 }
+                 relax_targets(f, up, d, u);
+               });
+         });
   collect_targets(queue, targets, out);
 }
 

@@ -370,6 +370,13 @@ class GeodesicQuery {
               std::vector<double>& out, std::size_t required);
   // The targets listed by face (face_target_head_, target_next_, target_faces_), none done.
   void index_targets(const std::vector<SurfacePoint>& targets);
+  // Dijkstra's loop: pops until the queue is empty or finished; a popped target is settled
+  // (settle_target), any other node counted, checked against the radius and the shell, then
+  // relaxed by relax(node, distance, tag).
+  template <typename Queue, typename Relax>
+  void settle(Queue& queue, double radius, double shell_from,
+              std::vector<std::pair<std::uint32_t, double>>* shell, std::size_t required,
+              Relax&& relax);
   // Target j popped: done, the search finished once the first `required` are.
   template <typename Queue>
   void settle_target(Queue& queue, std::size_t j, std::size_t required, std::size_t& remaining);

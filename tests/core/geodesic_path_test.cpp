@@ -34,6 +34,13 @@ core::TriMesh grid_surface(int w, int h, double cell,
   return m;
 }
 
+// Every point but points[i], in order.
+std::vector<core::SurfacePoint> others(const std::vector<core::SurfacePoint>& pts, std::size_t i) {
+  std::vector<core::SurfacePoint> out(pts);
+  out.erase(out.begin() + static_cast<std::ptrdiff_t>(i));
+  return out;
+}
+
 // Straightened distances from points[i] to every other point (Steiner search, then straightened).
 std::vector<double> straightened(const core::SteinerGraph& g,
                                  const std::vector<core::SurfacePoint>& pts, std::size_t i,
@@ -41,8 +48,7 @@ std::vector<double> straightened(const core::SteinerGraph& g,
                                  bool anchored = false, bool buckets = true) {
   core::GeodesicQuery q(g, buckets);
   q.set_anchored(anchored);
-  std::vector<core::SurfacePoint> targets(pts);
-  targets.erase(targets.begin() + static_cast<std::ptrdiff_t>(i));
+  const auto targets = others(pts, i);
   std::vector<double> d;
   q.distances(pts[i], targets, d);
   if (steiner) *steiner = d;
@@ -176,8 +182,7 @@ TEST_CASE("straightened paths on rough terrain are exact but for a few near ties
   for (std::size_t i = 0; i < pts.size(); ++i) {
     std::vector<double> steiner;
     const auto d = straightened(g, pts, i, s, &steiner);
-    std::vector<core::SurfacePoint> targets(pts);
-    targets.erase(targets.begin() + static_cast<std::ptrdiff_t>(i));
+    const auto targets = others(pts, i);
     const auto exact = exact_geodesics.distances(pts[i], targets);
     for (std::size_t t = 0; t < targets.size(); ++t) {
       CAPTURE(i, t);
@@ -215,8 +220,7 @@ TEST_CASE("anchored searches find the shortest route where the Steiner graph ran
     std::vector<double> steiner, search;
     const auto dp = straightened(g, pts, i, plain, &steiner);
     const auto da = straightened(g, pts, i, anchored, &search, true);
-    std::vector<core::SurfacePoint> targets(pts);
-    targets.erase(targets.begin() + static_cast<std::ptrdiff_t>(i));
+    const auto targets = others(pts, i);
     const auto exact = exact_geodesics.distances(pts[i], targets);
     for (std::size_t t = 0; t < targets.size(); ++t) {
       CAPTURE(i, t, search[t], steiner[t], exact[t]);
@@ -262,8 +266,7 @@ TEST_CASE("print straightened accuracy on real crops", "[.accuracy]") {
     const auto pts = core::sample_uniform(m, 24, 7);
     std::vector<std::vector<double>> exact(pts.size());
     for (std::size_t i = 0; i < pts.size(); ++i) {
-      std::vector<core::SurfacePoint> targets(pts);
-      targets.erase(targets.begin() + static_cast<std::ptrdiff_t>(i));
+      const auto targets = others(pts, i);
       exact[i] = core::ExactGeodesics(m).distances(pts[i], targets);
     }
     for (double f : {1.0, 0.25, 0.1}) {
