@@ -538,9 +538,8 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
     an.hi = 0.0f;
   };
   auto has_anchor = [](const Anchor& an) { return an.lo <= an.hi; };
-  // Node v (at v3) gets anchor point a at distance da (offsets from v).
-  auto place = [](Anchor& an, P3 v3, P3 a, double da) {
-    an.dist = da;
+  // Node v (at v3) gets anchor point a (offsets from v).
+  auto place = [](Anchor& an, P3 v3, P3 a) {
     an.off[0] = static_cast<float>(a.x - v3.x);
     an.off[1] = static_cast<float>(a.y - v3.y);
     an.off[2] = static_cast<float>(a.z - v3.z);
@@ -551,10 +550,10 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
     return P3{up[0] + an.off[0], up[1] + an.off[1], up[2] + an.off[2]};
   };
   // Node v (at v3) bends: its anchor is point a at distance da, seen through v's whole edge.
-  auto set_anchor = [&](std::uint32_t v, P3 v3, P3 a, double da) {
+  auto set_anchor = [&](std::uint32_t v, P3 v3, P3 a) {
     Anchor& an = anchors_[v];
     if (v < nv) return no_anchor(an);
-    place(an, v3, a, da);
+    place(an, v3, a);
     an.lo = 0.0f;
     an.hi = kWholeEdge;
   };
@@ -575,9 +574,9 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
     double sa = 0, h = 0, da = 0, lo = 0, hi = -1;
     bool straight = false;
   } cx;
-  // Sets cx up for node u (a Steiner point, at up) crossing into face f; cx.straight: u has an
-  // anchor behind the edge to carry.
-  auto cross_into = [&](std::uint32_t u, const double* up, std::uint32_t f) {
+  // Sets cx up for node u (a Steiner point, at up, at distance d) crossing into face f;
+  // cx.straight: u has an anchor behind the edge to carry.
+  auto cross_into = [&](std::uint32_t u, const double* up, double d, std::uint32_t f) {
     cx.straight = false;
     const auto ends = g_.node_edge_ends(u);
     cx.ia = ends[0];
@@ -595,8 +594,9 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
     cx.yo = norm(ny);
     if (!(cx.yo > 1e-12 * cx.len)) return;
     cx.ny = {ny.x / cx.yo, ny.y / cx.yo, ny.z / cx.yo};
-    cx.ao = std::hypot(cx.so, cx.yo);
-    cx.bo = std::hypot(cx.so - cx.len, cx.yo);
+    // note: not std::hypot, several times slower; the lengths are far from overflow.
+    cx.ao = std::sqrt(cx.so * cx.so + cx.yo * cx.yo);
+    cx.bo = std::sqrt((cx.so - cx.len) * (cx.so - cx.len) + cx.yo * cx.yo);
     const Anchor& an = anchors_[u];
     if (!has_anchor(an)) return;
     const P3 r = sub(anchor_of(u, up), cx.a);
@@ -608,7 +608,7 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
     cx.anchor = {cx.a.x + cx.sa * cx.ex.x - cx.h * cx.ny.x,
                  cx.a.y + cx.sa * cx.ex.y - cx.h * cx.ny.y,
                  cx.a.z + cx.sa * cx.ex.z - cx.h * cx.ny.z};
-    cx.da = an.dist;
+    cx.da = d - norm(sub(pt(up), anchor_of(u, up)));
     const double tol = 1e-7 * cx.len;
     cx.lo = an.lo - tol;
     cx.hi = std::min<double>(an.hi, cx.len) + tol;
@@ -655,7 +655,7 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
       tlo = cx.hi >= c0 ? 0.0 : cx.hi <= c1 ? 1.0 : solve(cx.hi);
       thi = cx.lo <= c1 ? 1.0 : cx.lo >= c0 ? 0.0 : solve(cx.lo);
     }
-    place(an, v3, cx.anchor, cx.da);
+    place(an, v3, cx.anchor);
     an.lo = static_cast<float>(std::min(tlo, thi) * len);
     an.hi = static_cast<float>(std::max(tlo, thi) * len);
   };
@@ -674,7 +674,7 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
   g_.face_nodes(source.face, nodes_);
   for (std::uint32_t v : nodes_) {
     const P3 v3 = pt(g_.position(v));
-    if (improve(v, norm(sub(v3, s3)), source.face, LabelHeap::kNone)) set_anchor(v, v3, s3, 0.0);
+    if (improve(v, norm(sub(v3, s3)), source.face, LabelHeap::kNone)) set_anchor(v, v3, s3);
   }
   // note: through cx where it is set up for f (a Steiner node's crossing), else bent at up.
   auto relax_targets = [&](std::uint32_t f, const double* up, double d, std::uint32_t from) {
@@ -700,13 +700,16 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
              const P3 uv = sub(v3, u3);
              const double w2 = dot(uv, uv), gap = old - d;
              if (!(gap > 0) || w2 >= gap * gap) return;
-             if (improve(v, d + std::sqrt(w2), via, u)) set_anchor(v, v3, u3, d);
+             if (improve(v, d + std::sqrt(w2), via, u)) set_anchor(v, v3, u3);
            };
            g_.for_each_neighbour(
                u, tag,
                [&](std::uint32_t v, std::uint32_t via) {
-                 const P3 v3 = pt(g_.position(v));
+                 // note: a settled node (negative in the buckets) or one at distance 0 cannot
+                 // improve: skipped before its position is read.
                  const double old = queue.dist(v);
+                 if (!(old > 0)) return;
+                 const P3 v3 = pt(g_.position(v));
                  if (via == SteinerGraph::kAlongEdge) {
                    // Along u's own edge: straight from u's anchor where its window holds v.
                    const Anchor& an = anchors_[u];
@@ -717,10 +720,11 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
                      const double tol = 1e-7 * (sv + norm(sub(u3, a)));
                      if (sv >= an.lo - tol && sv <= an.hi + tol) {
                        const P3 A = anchor_of(u, up);
-                       if (improve(v, an.dist + norm(sub(v3, A)), via, u) && v >= nv) {
+                       const double da = d - norm(sub(u3, A));
+                       if (improve(v, da + norm(sub(v3, A)), via, u) && v >= nv) {
                          Anchor& av = anchors_[v];
                          av = an;
-                         place(av, v3, A, an.dist);
+                         place(av, v3, A);
                        }
                        return;
                      }
@@ -728,16 +732,14 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
                    return bent(v, v3, old, via);
                  }
                  if (u < nv) return bent(v, v3, old, via);
-                 // note: a settled node (negative in the buckets) or one no nearer than the
-                 // anchor's straight segment could bring is skipped before any other geometry: the
-                 // segment bent at u is never shorter.
-                 if (!(old > 0)) return;
                  if (via != face) {
-                   cross_into(u, up, via);
+                   cross_into(u, up, d, via);
                    face = via;
                  }
                  if (cx.straight) {
                    const P3 av = sub(v3, cx.anchor);
+                   // note: a node no nearer than the anchor's straight segment could bring is
+                   // skipped: the segment bent at u is never shorter.
                    const double w2 = dot(av, av), gap = old - cx.da;
                    if (!(gap > 0) || w2 >= gap * gap) return;
                    double sp, yp;
@@ -751,7 +753,7 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
                },
                [&](std::uint32_t f) {
                  if (u >= nv && f != face) {
-                   cross_into(u, up, f);
+                   cross_into(u, up, d, f);
                    face = f;
                  }
                  relax_targets(f, up, d, u);

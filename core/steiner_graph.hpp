@@ -407,11 +407,11 @@ class GeodesicQuery {
   std::size_t settled_ = 0;
   bool anchored_ = false;
   // An anchored label: the point its straight segment starts from (offset from the node, in
-  // the plane of the face it came through), that point's distance, and the part of the node's
-  // edge (metres from its first end) the point sees through the faces crossed; lo > hi: none
-  // (the path bends at the node).
+  // the plane of the face it came through), and the part of the node's edge (metres from its
+  // first end) the point sees through the faces crossed; lo > hi: none (the path bends at the
+  // node). note: the point's own distance is not kept: it is the node's less the offset's
+  // length (20 bytes a node, not 32).
   struct Anchor {
-    double dist;
     float off[3];
     float lo, hi;
   };
