@@ -446,11 +446,20 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
     stage("exact geodesics (CGAL): T " + std::to_string(original.faces.size()) + " faces, T' " +
           std::to_string(simplified.faces.size()) + " faces");
   } else {
-    result.delta_m = options.delta_m > 0 ? options.delta_m
-                                         : kDefaultDeltaFactor * core::mean_edge_length(original);
+    // note: the paper's Steiner distances need one delta on both meshes (their bias depends on
+    // it); straightened ones are exact but for near ties, whose share depends on the spacing
+    // relative to the mesh's own faces, so each mesh gets its own.
+    if (options.delta_m > 0) {
+      result.delta_m = result.delta_mesh_m = options.delta_m;
+    } else if (options.straighten) {
+      result.delta_m = kStraightenedDeltaFactor * core::mean_edge_length(original);
+      result.delta_mesh_m = kStraightenedDeltaFactor * core::mean_edge_length(simplified);
+    } else {
+      result.delta_m = result.delta_mesh_m = kDefaultDeltaFactor * core::mean_edge_length(original);
+    }
     // Memory: both graphs, and as many searches on T (the larger graph) as the budget holds.
     const auto est_t = core::SteinerGraph::estimate(original, result.delta_m);
-    const auto est_s = core::SteinerGraph::estimate(simplified, result.delta_m);
+    const auto est_s = core::SteinerGraph::estimate(simplified, result.delta_mesh_m);
     result.graphs_bytes = est_t.bytes + est_s.bytes;
     result.search_bytes = core::GeodesicQuery::estimate_bytes(
         std::max(est_t.nodes, est_s.nodes),
@@ -472,7 +481,7 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
                    unbounded_searches(threads));
     }
     graph_t = std::make_unique<core::SteinerGraph>(original, result.delta_m);
-    graph_s = std::make_unique<core::SteinerGraph>(simplified, result.delta_m);
+    graph_s = std::make_unique<core::SteinerGraph>(simplified, result.delta_mesh_m);
     result.original_nodes = graph_t->node_count();
     result.simplified_nodes = graph_s->node_count();
     stage("Steiner graphs: T " + std::to_string(result.original_nodes) + " nodes, T' " +

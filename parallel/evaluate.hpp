@@ -71,7 +71,9 @@ struct EvalOptions {
   int points = 100;  // K points per set
   int sets = 3;      // independent sets
   std::uint64_t seed = 1;
-  double delta_m = 0;  // Steiner spacing; 0: kDefaultDeltaFactor x mean edge of T
+  // Steiner spacing on both meshes; 0: kStraightenedDeltaFactor x each mesh's own mean edge
+  // (straighten), kDefaultDeltaFactor x the mean edge of T on both (the paper's distances).
+  double delta_m = 0;
   // Points outside T' (and given points outside T) within this distance are snapped onto it.
   double snap_m = 0;
   // Each pair's Steiner paths straightened into geodesics (PairwiseOptions::straighten): near
@@ -94,13 +96,20 @@ struct EvalOptions {
   bool keep_pairs = false;
 };
 
-// Default Steiner spacing as a fraction of the mean 3D edge length of the original TIN.
+// Default Steiner spacing as a fraction of the mean 3D edge length of the original TIN: the
+// paper's Steiner distances (and the meta method's piece values).
 inline constexpr double kDefaultDeltaFactor = 0.25;
+// Default spacing of straightened geodesics, as a fraction of each mesh's own mean edge. The
+// search only has to find the shortest route among near ties, the straightening makes its
+// length exact: against exact geodesics on st_helens_crater, zion_canyon and peru_mongon
+// (every mode at 10 % and 50 %) the measure stays within 3 % at 0.35, 1.5 x faster per node
+// than at 0.25; at 0.5 it moves by up to 5 %.
+inline constexpr double kStraightenedDeltaFactor = 0.35;
 
 struct EvalResult {
-  double distance_error = 0;       // mean of the set errors
-  std::vector<double> set_errors;  // per set: mean |GD_T - GD_T'| / GD_T over all pairs
-  double delta_m = 0;
+  double distance_error = 0;             // mean of the set errors
+  std::vector<double> set_errors;        // per set: mean |GD_T - GD_T'| / GD_T over all pairs
+  double delta_m = 0, delta_mesh_m = 0;  // Steiner spacing on T and on T'
   std::size_t original_nodes = 0, simplified_nodes = 0;  // Steiner graph sizes
   std::size_t snapped = 0;                               // sample points snapped onto T'
   double original_s = 0, simplified_s = 0;  // wall time of the geodesics on T and on T'

@@ -89,6 +89,28 @@ TEST_CASE("the distance error grows as fewer vertices are kept", "[parallel][eva
   CHECK(e10 > e50);
 }
 
+TEST_CASE("the default spacing follows each mesh's edges, the paper's distances share T's",
+          "[parallel][evaluate]") {
+  const auto [t, s] = hills_and_20_percent();
+  auto opt = eval_options(6, 1);
+  const double edge_t = core::mean_edge_length(t), edge_s = core::mean_edge_length(s);
+  REQUIRE(edge_s > 1.5 * edge_t);  // a 20 % TIN has longer edges
+  const auto straightened = par::evaluate_distances(t, s, opt);
+  CHECK(straightened.delta_m == par::kStraightenedDeltaFactor * edge_t);
+  CHECK(straightened.delta_mesh_m == par::kStraightenedDeltaFactor * edge_s);
+  CHECK(straightened.simplified_nodes ==
+        core::SteinerGraph(s, straightened.delta_mesh_m).node_count());
+  opt.straighten = false;
+  const auto steiner = par::evaluate_distances(t, s, opt);
+  CHECK(steiner.delta_m == par::kDefaultDeltaFactor * edge_t);
+  CHECK(steiner.delta_mesh_m == steiner.delta_m);
+  opt.straighten = true;
+  opt.delta_m = 7.5;
+  const auto given = par::evaluate_distances(t, s, opt);
+  CHECK(given.delta_m == 7.5);
+  CHECK(given.delta_mesh_m == 7.5);
+}
+
 TEST_CASE("evaluation figures are identical for 1 and 2 threads",
           "[parallel][evaluate][determinism]") {
   const auto [t, s] = hills_and_20_percent();
