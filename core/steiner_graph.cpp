@@ -549,7 +549,9 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
     const Anchor& an = anchors_[u];
     return P3{up[0] + an.off[0], up[1] + an.off[1], up[2] + an.off[2]};
   };
-  // Node v (at v3) bends: its anchor is point a at distance da, seen through v's whole edge.
+  // The distance of anchor point a of a node at p3, at distance d: the node's less the segment.
+  auto anchor_dist = [&](P3 p3, P3 a, double d) { return d - norm(sub(p3, a)); };
+  // Node v (at v3) bends: its anchor is point a, seen through v's whole edge.
   auto set_anchor = [&](std::uint32_t v, P3 v3, P3 a) {
     Anchor& an = anchors_[v];
     if (v < nv) return no_anchor(an);
@@ -599,7 +601,8 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
     cx.bo = std::sqrt((cx.so - cx.len) * (cx.so - cx.len) + cx.yo * cx.yo);
     const Anchor& an = anchors_[u];
     if (!has_anchor(an)) return;
-    const P3 r = sub(anchor_of(u, up), cx.a);
+    const P3 A = anchor_of(u, up);
+    const P3 r = sub(A, cx.a);
     cx.sa = dot(r, cx.ex);
     const P3 perp{r.x - cx.sa * cx.ex.x, r.y - cx.sa * cx.ex.y, r.z - cx.sa * cx.ex.z};
     cx.h = norm(perp);
@@ -608,7 +611,7 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
     cx.anchor = {cx.a.x + cx.sa * cx.ex.x - cx.h * cx.ny.x,
                  cx.a.y + cx.sa * cx.ex.y - cx.h * cx.ny.y,
                  cx.a.z + cx.sa * cx.ex.z - cx.h * cx.ny.z};
-    cx.da = d - norm(sub(pt(up), anchor_of(u, up)));
+    cx.da = anchor_dist(pt(up), A, d);
     const double tol = 1e-7 * cx.len;
     cx.lo = an.lo - tol;
     cx.hi = std::min<double>(an.hi, cx.len) + tol;
@@ -720,7 +723,7 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
                      const double tol = 1e-7 * (sv + norm(sub(u3, a)));
                      if (sv >= an.lo - tol && sv <= an.hi + tol) {
                        const P3 A = anchor_of(u, up);
-                       const double da = d - norm(sub(u3, A));
+                       const double da = anchor_dist(u3, A, d);
                        if (improve(v, da + norm(sub(v3, A)), via, u) && v >= nv) {
                          Anchor& av = anchors_[v];
                          av = an;
