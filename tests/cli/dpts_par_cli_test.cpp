@@ -91,8 +91,10 @@ TEST_CASE("output bytes are identical for 1, 2 and 4 threads", "[cli][determinis
     const auto out = (fx.dir / ("t" + t + ".ply")).string();
     INFO(algo << ", threads " << t);
     // --tile-mb 1: the meta engine works on several pieces at once.
-    REQUIRE(test::run(kExe, {"--algo", algo, "--tile-mb", "1", "--threads", t, fx.dem, out})
-                .exit_code == 0);
+    const auto r =
+        test::run(kExe, {"--algo", algo, "--tile-mb", "1", "--threads", t, fx.dem, out});
+    INFO(r.err);  // a sanitizer's report (TSan exits 66) is in the child's stderr
+    REQUIRE(r.exit_code == 0);
     std::ifstream in(out, std::ios::binary);
     std::ostringstream ss;
     ss << in.rdbuf();
