@@ -583,9 +583,8 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
     const auto ends = g_.node_edge_ends(u);
     cx.ia = ends[0];
     cx.ib = ends[1];
-    for (std::uint32_t c : g_.mesh().faces[f]) {
-      if (c != ends[0] && c != ends[1]) cx.io = c;
-    }
+    // note: from u's edge record, which the search has just read, not from the face's corners.
+    cx.io = g_.opposite(u, f);
     cx.a = pt(g_.position(ends[0]));
     const P3 e = sub(pt(g_.position(ends[1])), cx.a);
     cx.len = norm(e);

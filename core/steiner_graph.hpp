@@ -15,6 +15,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/huge_pages.hpp"
+
 namespace dpts::core {
 
 // A triangle mesh in metres: x, y in a metric CRS, z height. Faces counter-clockwise.
@@ -89,6 +91,11 @@ class SteinerGraph {
     if (node < mesh_.vertex_count()) return {node, node};
     return edges_[nodes_[node].edge].ends;
   }
+  // The corner of face f off a Steiner node's edge (f: one of the edge's faces).
+  std::uint32_t opposite(std::uint32_t node, std::uint32_t f) const {
+    const Edge& e = edges_[nodes_[node].edge];
+    return e.sides[0].face == f ? e.sides[0].opposite : e.sides[1].opposite;
+  }
   // Calls fn(f) for each face around vertex v (in no particular order).
   template <typename Fn>
   void for_each_face_of_vertex(std::uint32_t v, Fn&& fn) const {
@@ -156,7 +163,7 @@ class SteinerGraph {
     std::array<double, 3> p;
     std::uint32_t edge;  // the edge a Steiner point lies on; kNoEdge for a vertex
   };
-  std::vector<Node> nodes_;
+  HugeVector<Node> nodes_;
   std::vector<std::array<std::uint32_t, 3>> face_edges_;  // edge of (v0,v1), (v1,v2), (v2,v0)
   std::vector<std::uint32_t> edge_first_;                 // first Steiner node of each edge, + end
   // note: Dijkstra's time goes into cache misses, one per dependent load; so what a settled node
@@ -177,9 +184,9 @@ class SteinerGraph {
     std::array<std::uint32_t, 2> along{};            // nearest node on each of its two edges there
     std::uint32_t across_first = 0, across_end = 0;  // Steiner nodes of the opposite edge
   };
-  std::vector<Edge> edges_;
+  HugeVector<Edge> edges_;
   std::vector<std::uint32_t> corner_first_;  // CSR vertex -> corners_
-  std::vector<Corner> corners_;
+  HugeVector<Corner> corners_;
 };
 
 // Dijkstra's tentative distances with an indexed 4-ary min-heap over them (decrease-key: each
@@ -226,7 +233,7 @@ class LabelHeap {
   };
   void sift_up(std::size_t i, Entry e);
   std::vector<Entry> heap_;
-  std::vector<Label> label_;
+  HugeVector<Label> label_;
   bool finished_ = false;
 };
 
@@ -296,7 +303,7 @@ class BucketQueue {
   double per_width_;  // 1 / bucket width
   std::vector<std::vector<std::uint32_t>> ring_;
   std::uint64_t mask_;  // ring size - 1
-  std::vector<Label> label_;
+  HugeVector<Label> label_;
   std::uint64_t bucket_ = 0;  // the bucket being emptied
   std::size_t next_ = 0;      // its next entry
   std::size_t queued_ = 0;    // entries in the ring, skipped ones included
@@ -415,7 +422,7 @@ class GeodesicQuery {
     float off[3];
     float lo, hi;
   };
-  std::vector<Anchor> anchors_;
+  HugeVector<Anchor> anchors_;
 };
 
 }  // namespace dpts::core
