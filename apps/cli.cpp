@@ -35,7 +35,9 @@ Simplifies a DEM (a band of any raster GDAL reads) into a TIN that preserves sur
                        pieces' mean ED/GD), run out of core: pieces are read, simplified
                        and freed concurrently, and only the kept vertices are merged;
                        qslim: Garland-Heckbert quadric edge collapse (the paper's
-                       competitor) with the outline locked and no folds
+                       competitor) with the outline locked and no folds; qem: the same
+                       with the outline's straight runs simplified too (the footprint
+                       kept exactly), in memory
   --levels C           vp-meta/pld-meta: at least 2^C pieces (default 4)
   --value-points L     vp-meta/pld-meta: random points per piece value (default 20)
   --verbose            vp-meta/pld-meta: print every piece's value and budget, and times
@@ -107,13 +109,14 @@ ParOptions parse_par(const std::vector<std::string>& args) {
     } else if (arg == "--algo") {
       const std::string v = need(arg);
       o.meta = v == "vp-meta" || v == "pld-meta";
-      o.qslim = v == "qslim";
-      if (v == "vp" || v == "vp-meta" || v == "qslim") {
+      o.qslim = v == "qslim" || v == "qem";
+      o.free_outline = v == "qem";
+      if (v == "vp" || v == "vp-meta" || v == "qslim" || v == "qem") {
         o.elimination.importance = core::Importance::vp;
       } else if (v == "pld" || v == "pld-meta") {
         o.elimination.importance = core::Importance::pld;
       } else {
-        throw UsageError("--algo " + v + ": expected vp, pld, vp-meta, pld-meta or qslim");
+        throw UsageError("--algo " + v + ": expected vp, pld, vp-meta, pld-meta, qslim or qem");
       }
       o.algo_text = v;
     } else if (arg == "--levels") {

@@ -22,9 +22,9 @@ struct ParOptions {
   par::KeepTarget keep;
   std::string keep_text = "10%";
   std::string algo_text = "vp";
-  bool meta = false;
-  bool qslim = false;  // --algo qslim: the paper's competitor  // --algo vp-meta | pld-meta: the
-                       // piece engine (PLD'/VP')
+  bool meta = false;          // --algo vp-meta | pld-meta: the piece engine (PLD'/VP')
+  bool qslim = false;         // --algo qslim: the paper's competitor; --algo qem
+  bool free_outline = false;  // --algo qem: quadric collapse with the outline's straight runs free
   int levels = 4;
   int value_points = 20;
   bool verbose = false;

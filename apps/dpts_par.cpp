@@ -149,7 +149,7 @@ int run_qslim(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printe
   io::Dem dem = read_whole_dem(o, core::kQslimBytesPerCell, progress);
   print_notes(dem, o);
   io::AtomicOutputFile out(o.output);
-  if (!progress(0.0, "qslim")) throw Cancelled();
+  if (!progress(0.0, o.algo_text.c_str())) throw Cancelled();
   // In the frame (u, w; heights in frame units): collinear cells stay exactly collinear there,
   // so the fold test sees flat slivers along the outline of a reprojected DEM as flat.
   const core::GridTin tin = core::grid_tin(dem.grid, core::delaunay_diagonal(dem.frame));
@@ -167,8 +167,20 @@ int run_qslim(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printe
   const std::size_t input = grid.vertex_count();
   const std::size_t target = par::target_count(o.keep, input);
   core::QslimStats stats;
-  const core::TriMesh result = core::qslim(grid, target, &stats);
-  if (!progress(1.0, "qslim")) throw Cancelled();
+  core::QslimOptions qo;
+  if (o.free_outline) {
+    qo.outline = core::Outline::kStraightRunsFree;
+    // A reprojected DEM's outline is straight in the frame, curved in the output CRS: a chord
+    // may stray from it by the outline tolerance at most, as in the elimination.
+    const auto chord_ok = dem.outline_chord_test(dem.outline_tolerance_m());
+    if (chord_ok) {
+      qo.outline_chord_ok = [&tin, chord_ok](std::uint32_t a, std::uint32_t b) {
+        return chord_ok(tin.cells[a], tin.cells[b]);
+      };
+    }
+  }
+  const core::TriMesh result = core::qslim(grid, target, &stats, qo);
+  if (!progress(1.0, o.algo_text.c_str())) throw Cancelled();
   printer.finish();
   warn_kept(stats.kept_vertices, target);
   if (o.verbose) {
