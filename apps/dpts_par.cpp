@@ -184,8 +184,8 @@ int run_qslim(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printe
   printer.finish();
   warn_kept(stats.kept_vertices, target);
   if (o.verbose) {
-    std::fprintf(stderr, "dpts-par: qslim: %zu collapses refused (fold or border)\n",
-                 stats.rejected_folds);
+    std::fprintf(stderr, "dpts-par: %s: %zu collapses refused (fold or border)\n",
+                 o.algo_text.c_str(), stats.rejected_folds);
   }
   // Back to grid positions (the frame is linear), then to the output CRS.
   double inv[2][2];
