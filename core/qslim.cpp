@@ -8,7 +8,9 @@
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/GarlandHeckbert_triangle_policies.h>
 #include <CGAL/Surface_mesh_simplification/edge_collapse.h>
 
+#include <map>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 namespace dpts::core {
@@ -59,15 +61,20 @@ bool straight_outline_vertex(const Mesh& mesh, VertexIndex v,
 // Placement with a free outline: the quadric's optimum for an interior edge; a vertex on the
 // outline never moves (an interior neighbour collapses onto it); an outline edge collapses
 // onto one of its ends, the other one being a straight outline vertex, whichever costs less.
-// note: an interior edge between two outline vertices would pinch the footprint: refused.
+// note: an interior edge between two outline vertices would pinch the footprint: refused. So is
+// any collapse at a vertex where the outline already pinches (two voids, or a void and the
+// edge, touching at a corner): CGAL walks one fan of such a vertex only, and would take it for
+// a plain outline vertex.
 template <typename Placement, typename Cost>
 struct OutlinePlacement {
   Placement base;
   Cost cost;
   const Mesh* mesh;
   const std::function<bool(std::uint32_t, std::uint32_t)>* chord_ok;
+  const std::vector<char>* pinched;  // per input vertex
   template <typename Profile>
   boost::optional<typename Profile::Point> operator()(const Profile& profile) const {
+    if ((*pinched)[profile.v0().idx()] || (*pinched)[profile.v1().idx()]) return boost::none;
     const bool b0 = mesh->is_border(profile.v0(), true);
     const bool b1 = mesh->is_border(profile.v1(), true);
     if (!b0 && !b1) return base(profile);
@@ -180,8 +187,24 @@ TriMesh qslim(const TriMesh& in, std::size_t keep, QslimStats* stats, const Qsli
     // triangle, 1: 17.5/5.74/2.57/1.08 (probabilistic triangle quadrics: 66.8 at 10 %).
     using Policies = SMS::GarlandHeckbert_triangle_policies<Mesh, K>;
     Policies policies(mesh, 1.0);
+    // Pinched vertices: on more than two outline edges.
+    std::map<std::pair<std::uint32_t, std::uint32_t>, int> uses;
+    for (const auto& f : in.faces) {
+      for (int i = 0; i < 3; ++i) {
+        const std::uint32_t a = f[i], b = f[(i + 1) % 3];
+        ++uses[{std::min(a, b), std::max(a, b)}];
+      }
+    }
+    std::vector<int> outline_edges(in.vertex_count(), 0);
+    for (const auto& [e, n] : uses) {
+      if (n != 1) continue;
+      ++outline_edges[e.first];
+      ++outline_edges[e.second];
+    }
+    std::vector<char> pinched(in.vertex_count(), 0);
+    for (std::size_t v = 0; v < in.vertex_count(); ++v) pinched[v] = outline_edges[v] > 2;
     const OutlinePlacement<Policies::Get_placement, Policies::Get_cost> placement{
-        policies.get_placement(), policies.get_cost(), &mesh, &options.outline_chord_ok};
+        policies.get_placement(), policies.get_cost(), &mesh, &options.outline_chord_ok, &pinched};
     SMS::edge_collapse(
         mesh, VertexCountStop{&mesh, keep},
         CGAL::parameters::get_cost(policies.get_cost()).get_placement(placement).filter(filter));

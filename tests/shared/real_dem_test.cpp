@@ -3,9 +3,12 @@
 
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <set>
 
 #include "core/footprint.hpp"
 #include "core/mesh_check.hpp"
+#include "core/qslim.hpp"
+#include "core/surface_sampling.hpp"
 #include "io/dem_reader.hpp"
 #include "parallel/meta.hpp"
 #include "parallel/simplify.hpp"
@@ -125,4 +128,41 @@ TEST_CASE("Steiner distances on real 50 x 50 crops: within 1 % of exact on avera
     CHECK(fig.min_rel > -1e-9);
     CHECK(fig.mean_rel < 0.01);
   }
+}
+
+TEST_CASE("Andorra SRTM voids: qem keeps the footprint, and the pinched outline whole",
+          "[shared][qslim]") {
+  GDALAllRegister();
+  const io::Dem dem = io::read_dem(test::shared_data("pyrenees_andorra_voids.tif"), {}, nullptr);
+  // The grid TIN in the frame, as dpts-par gives it to qem: voids touching at a corner pinch
+  // the outline at a vertex there.
+  const core::GridTin tin = core::grid_tin(dem.grid, core::delaunay_diagonal(dem.frame));
+  core::TriMesh in;
+  for (std::uint32_t cell : tin.cells) {
+    const int c = static_cast<int>(cell % static_cast<std::uint32_t>(dem.width));
+    const int r = static_cast<int>(cell / static_cast<std::uint32_t>(dem.width));
+    in.xyz.insert(in.xyz.end(), {dem.frame.u(c, r), dem.frame.w(c, r),
+                                 dem.grid.z[cell] / dem.frame.metres_per_unit});
+  }
+  in.faces = tin.faces;
+  core::fix_orientation(in);
+  core::QslimOptions options;
+  options.outline = core::Outline::kStraightRunsFree;
+  const core::TriMesh out = core::qslim(in, in.vertex_count() / 10, nullptr, options);
+  CHECK(out.vertex_count() == in.vertex_count() / 10);
+  const core::MeshCheck mc = core::check_mesh(core::xy_of(out.xyz), out.faces);
+  CHECK(mc.clockwise_or_flat == 0);
+  CHECK(mc.bad_edges == 0);
+  CHECK(mc.area == Approx(core::mesh_area(core::xy_of(in.xyz), in.faces)).epsilon(1e-12));
+  // Every vertex in some face, and no two at one place (a pinch split in two would be).
+  std::vector<char> used(out.vertex_count(), 0);
+  for (const auto& f : out.faces) {
+    for (auto v : f) used[v] = 1;
+  }
+  CHECK(std::count(used.begin(), used.end(), 0) == 0);
+  std::set<std::pair<double, double>> places;
+  for (std::size_t v = 0; v < out.vertex_count(); ++v) {
+    places.insert({out.xyz[3 * v], out.xyz[3 * v + 1]});
+  }
+  CHECK(places.size() == out.vertex_count());
 }
