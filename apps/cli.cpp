@@ -5,10 +5,11 @@
 
 #include <algorithm>
 #include <charconv>
-#include <filesystem>
-#include <iterator>
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
+#include <iterator>
 
 #include "core/errors.hpp"
 #include "parallel/meta.hpp"
@@ -43,6 +44,9 @@ Simplifies a DEM (a band of any raster GDAL reads) into a TIN that preserves sur
   --verbose            vp-meta/pld-meta: print every piece's value and budget, and times
   --keep P%            keep P percent of the input vertices, 0 < P <= 100 (default 10%)
   --vertices N         keep N vertices instead (N >= 3)
+  --max-error M        qem: keep the vertical error at every valid cell centre <= M (units
+                       of the output CRS); with --keep or --vertices both bounds hold (the
+                       count may then be exceeded), alone as few vertices as M allows
   --vp-volume exact|mc VP volume: exact integral over the hole (default) or the paper's
                        Monte Carlo estimate
   --vp-samples N       Monte Carlo points per VP evaluation (default 100)
@@ -140,6 +144,17 @@ ParOptions parse_par(const std::vector<std::string>& args) {
       }
       o.keep.percent = p;
       keep_seen = true;
+    } else if (arg == "--max-error") {
+      const std::string v = need(arg);
+      double m = 0;
+      const auto res = std::from_chars(v.data(), v.data() + v.size(), m);
+      if (v.empty() || res.ec != std::errc() || res.ptr != v.data() + v.size() || !(m > 0) ||
+          !std::isfinite(m)) {
+        throw UsageError("--max-error " + v +
+                         ": expected a positive number (units of the output CRS)");
+      }
+      o.max_error = m;
+      o.max_error_text = v;
     } else if (arg == "--vertices") {
       const std::string v = need(arg);
       o.keep.vertices = parse_number<std::size_t>(arg, v, 3, "an integer >= 3");
@@ -203,7 +218,18 @@ ParOptions parse_par(const std::vector<std::string>& args) {
   }
   if (o.help || o.version) return o;
   if (keep_seen && vertices_seen) throw UsageError("--keep and --vertices: give one, not both");
-  if (!keep_seen && !vertices_seen) o.keep.percent = 10.0;
+  if (o.max_error && !o.free_outline) {
+    throw UsageError("--max-error: only with --algo qem so far");
+  }
+  if (!keep_seen && !vertices_seen) {
+    if (o.max_error) {
+      // The error bound alone: as few vertices as it allows.
+      o.keep.vertices = 3;
+      o.keep_text = "none";
+    } else {
+      o.keep.percent = 10.0;
+    }
+  }
   if (!o.batch.empty() || !o.out_dir.empty()) {
     if (o.batch.empty()) throw UsageError("--out-dir: needs --batch");
     if (o.out_dir.empty()) throw UsageError("--batch: needs --out-dir");

@@ -5,6 +5,7 @@
 #include <charconv>
 #include <chrono>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -22,9 +23,12 @@ struct ParOptions {
   par::KeepTarget keep;
   std::string keep_text = "10%";
   std::string algo_text = "vp";
-  bool meta = false;          // --algo vp-meta | pld-meta: the piece engine (PLD'/VP')
-  bool qslim = false;         // --algo qslim: the paper's competitor; --algo qem
-  bool free_outline = false;  // --algo qem: quadric collapse with the outline's straight runs free
+  bool meta = false;   // --algo vp-meta | pld-meta: the piece engine (PLD'/VP')
+  bool qslim = false;  // --algo qslim (the paper's competitor) or qem
+  // --algo qem: quadric collapse with the outline's straight runs free
+  bool free_outline = false;
+  std::optional<double> max_error;  // --max-error M: vertical error bound (output CRS units)
+  std::string max_error_text;       // M as given
   int levels = 4;
   int value_points = 20;
   bool verbose = false;

@@ -54,6 +54,7 @@ std::string StageClock::json() const {
 std::string output_options_json(const ParOptions& o) {
   io::JsonObject j;
   j.add("algo", o.algo_text).add("keep", o.keep_text);
+  if (o.max_error) j.add("max_error", *o.max_error);
   if (o.meta) j.add("levels", o.levels).add("tile_mb", o.tile_mb).add("value_points", o.value_points);
   j.add("vp_volume", o.elimination.vp_volume == core::VolumeMethod::exact ? "exact" : "mc")
       .add("vp_samples", o.elimination.vp_samples)

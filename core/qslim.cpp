@@ -116,6 +116,7 @@ struct NoFoldFilter {
   const Mesh* mesh;
   std::size_t* rejected;
   Outline outline;
+  const std::function<bool(const double*, const double*, const double*)>* triangle_ok;
   template <typename Profile>
   boost::optional<typename Profile::Point> operator()(
       const Profile& profile, boost::optional<typename Profile::Point> placement) const {
@@ -141,6 +142,14 @@ struct NoFoldFilter {
         ++*rejected;
         return boost::none;
       }
+      if (*triangle_ok) {
+        const double a[3] = {p.x(), p.y(), p.z()}, b[3] = {q.x(), q.y(), q.z()},
+                     c[3] = {r.x(), r.y(), r.z()};
+        if (!(*triangle_ok)(a, b, c)) {
+          ++*rejected;
+          return boost::none;
+        }
+      }
     }
     return placement;
   }
@@ -164,7 +173,7 @@ TriMesh qslim(const TriMesh& in, std::size_t keep, QslimStats* stats, const Qsli
   QslimStats local;
   QslimStats& st = stats ? *stats : local;
   st.input_vertices = mesh.number_of_vertices();
-  const NoFoldFilter filter{&mesh, &st.rejected_folds, outline};
+  const NoFoldFilter filter{&mesh, &st.rejected_folds, outline, &options.triangle_ok};
   if (outline == Outline::kLocked) {
     // The paper's competitor: classic plane quadrics (Garland and Heckbert 1997), CGAL's
     // default weight on the outline's quadrics.

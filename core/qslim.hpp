@@ -43,6 +43,10 @@ struct QslimOptions {
   // (mesh vertex ids), for a mesh whose coordinates are a linear stand-in for the output CRS
   // (a reprojected DEM's frame); null: always.
   std::function<bool(std::uint32_t a, std::uint32_t b)> outline_chord_ok;
+  // Whether a triangle (corners a, b, c, counter-clockwise seen from above) may be made: a
+  // collapse after which any triangle of its star fails is refused (a bound on the vertical
+  // error, --max-error). Null: always.
+  std::function<bool(const double* a, const double* b, const double* c)> triangle_ok;
 };
 
 // Simplifies a triangle mesh (counter-clockwise faces seen from above, in metres) to `keep`

@@ -138,6 +138,11 @@ TEST_CASE("bad usage exits 2 with a one-line message naming the flag, creating n
       {{"--tile-mb", "0", fx.dem, out}, "--tile-mb 0: expected an integer >= 1"},
       {{"--value-points", "1", fx.dem, out}, "--value-points 1: expected an integer >= 2"},
       {{"--bogus", fx.dem, out}, "--bogus: unknown option"},
+      {{"--algo", "qem", "--max-error", "0", fx.dem, out},
+       "--max-error 0: expected a positive number (units of the output CRS)"},
+      {{"--algo", "qem", "--max-error", "1m", fx.dem, out},
+       "--max-error 1m: expected a positive number (units of the output CRS)"},
+      {{"--max-error", "1", fx.dem, out}, "--max-error: only with --algo qem so far"},
       {{fx.dem}, "expected INPUT and OUTPUT"},
       {{fx.dem, fx.dem}, fx.dem + ": OUTPUT is the INPUT file"},
       {{"--t-srs", "EPSG:4326", fx.dem, out}, "--t-srs EPSG:4326: expected a projected CRS"},
@@ -270,5 +275,67 @@ TEST_CASE("a rotated DEM's vertices are its cell centres and its TIN covers its 
     CHECK(mc.clockwise_or_flat == 0);
     CHECK(mc.bad_edges == 0);
     CHECK(mc.area == Approx((w - 1) * (h - 1) * std::fabs(det)).epsilon(1e-9));
+  }
+}
+
+TEST_CASE("qem --max-error bounds the vertical error at every valid cell centre", "[cli][qslim]") {
+  Fixture fx;
+  const auto out = (fx.dir / "out.ply").string();
+  // The fixture's heights at cell (c, r), its centre at (400005 + 10 c, 3799995 - 10 r).
+  auto height = [](int c, int r) { return 500.0 + 40.0 * std::sin(c * 0.4) + 3.0 * r; };
+  auto valid = [](int c, int r) { return !(c > 10 && c < 14 && r > 5 && r < 9); };
+  // The largest |mesh - DEM| over the valid cell centres (each found in its triangle).
+  auto max_error = [&](const io::Mesh& m) {
+    double worst = 0;
+    for (int r = 0; r < 20; ++r) {
+      for (int c = 0; c < 30; ++c) {
+        if (!valid(c, r)) continue;
+        const double x = 400005.0 + 10 * c, y = 3799995.0 - 10 * r;
+        bool found = false;
+        for (const auto& f : m.faces) {
+          const double* p[3];
+          for (int k = 0; k < 3; ++k) p[k] = &m.xyz[3 * f[k]];
+          auto orient = [&](const double* a, const double* b) {
+            return (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0]);
+          };
+          const double det =
+              (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
+          const double l0 = orient(p[1], p[2]) / det, l1 = orient(p[2], p[0]) / det,
+                       l2 = orient(p[0], p[1]) / det;
+          if (l0 < -1e-9 || l1 < -1e-9 || l2 < -1e-9) continue;
+          const double z = l0 * p[0][2] + l1 * p[1][2] + l2 * p[2][2];
+          worst = std::max(worst, std::fabs(z - height(c, r)));
+          found = true;
+          break;
+        }
+        CHECK(found);
+      }
+    }
+    return worst;
+  };
+  SECTION("alone: as few vertices as the bound allows") {
+    auto r = test::run(kExe, {"--algo", "qem", "--max-error", "2", fx.dem, out});
+    REQUIRE(r.exit_code == 0);
+    const io::Mesh m2 = io::read_ply_file(out);
+    CHECK(max_error(m2) <= 2.0);
+    CHECK(m2.comments[0].find("--max-error 2") != std::string::npos);
+    r = test::run(kExe, {"--algo", "qem", "--max-error", "10", fx.dem, out});
+    REQUIRE(r.exit_code == 0);
+    const io::Mesh m10 = io::read_ply_file(out);
+    CHECK(max_error(m10) <= 10.0);
+    CHECK(max_error(m10) > 2.0);  // the bound is what stops it
+    CHECK(m10.vertex_count() < m2.vertex_count());
+  }
+  SECTION("with a count: both hold, the count exceeded only for the bound") {
+    auto r =
+        test::run(kExe, {"--algo", "qem", "--max-error", "2", "--vertices", "50", fx.dem, out});
+    REQUIRE(r.exit_code == 0);
+    const io::Mesh m = io::read_ply_file(out);
+    CHECK(m.vertex_count() > 50);
+    CHECK(max_error(m) <= 2.0);
+    CHECK(r.err.find("--max-error 2 needs them") != std::string::npos);
+    r = test::run(kExe, {"--algo", "qem", "--max-error", "1000", "--vertices", "50", fx.dem, out});
+    REQUIRE(r.exit_code == 0);
+    CHECK(io::read_ply_file(out).vertex_count() == 50);
   }
 }
