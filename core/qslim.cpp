@@ -9,9 +9,7 @@
 #include <CGAL/Surface_mesh_simplification/edge_collapse.h>
 
 #include <cmath>
-#include <map>
 #include <stdexcept>
-#include <utility>
 #include <vector>
 
 namespace dpts::core {
@@ -240,22 +238,14 @@ TriMesh qslim(const TriMesh& in, std::size_t keep, QslimStats* stats, const Qsli
     // triangle, 1: 17.5/5.74/2.57/1.08 (probabilistic triangle quadrics: 66.8 at 10 %).
     using Policies = SMS::GarlandHeckbert_triangle_policies<Mesh, K>;
     Policies policies(mesh, 1.0);
-    // Pinched vertices: on more than two outline edges.
-    std::map<std::pair<std::uint32_t, std::uint32_t>, int> uses;
-    for (const auto& f : in.faces) {
-      for (int i = 0; i < 3; ++i) {
-        const std::uint32_t a = f[i], b = f[(i + 1) % 3];
-        ++uses[{std::min(a, b), std::max(a, b)}];
-      }
+    // Pinched vertices: more than one border halfedge into them (more than two outline edges).
+    std::vector<char> border_in(in.vertex_count(), 0), pinched(in.vertex_count(), 0);
+    for (Mesh::Halfedge_index h : mesh.halfedges()) {
+      if (!mesh.is_border(h)) continue;
+      const std::size_t v = mesh.target(h).idx();
+      if (border_in[v]) pinched[v] = 1;
+      border_in[v] = 1;
     }
-    std::vector<int> outline_edges(in.vertex_count(), 0);
-    for (const auto& [e, n] : uses) {
-      if (n != 1) continue;
-      ++outline_edges[e.first];
-      ++outline_edges[e.second];
-    }
-    std::vector<char> pinched(in.vertex_count(), 0);
-    for (std::size_t v = 0; v < in.vertex_count(); ++v) pinched[v] = outline_edges[v] > 2;
     const OutlinePlacement<Policies::Get_placement, Policies::Get_cost> placement{
         policies.get_placement(), policies.get_cost(), &mesh, &options.outline_chord_ok, &pinched};
     SMS::edge_collapse(mesh, VertexCountStop{&mesh, keep},
