@@ -36,12 +36,15 @@ Simplifies a DEM (a band of any raster GDAL reads) into a TIN that preserves sur
                        pieces' mean ED/GD), run out of core: pieces are read, simplified
                        and freed concurrently, and only the kept vertices are merged;
                        qslim: Garland-Heckbert quadric edge collapse (the paper's
-                       competitor) with the outline locked and no folds; qem: the same
-                       with the outline's straight runs simplified too (the footprint
-                       kept exactly), in memory
-  --levels C           vp-meta/pld-meta: at least 2^C pieces (default 4)
+                       competitor) with the outline locked and no folds; qem: dpts's own
+                       quadric collapse (triangle quadrics, a cost that sees surface area,
+                       the outline's straight runs simplified too, the footprint kept
+                       exactly), out of core: pieces collapsed concurrently with their
+                       seams locked, then stitched and collapsed on in one order (in
+                       memory, whole DEM, with --max-error)
+  --levels C           vp-meta/pld-meta/qem: at least 2^C pieces (default 4)
   --value-points L     vp-meta/pld-meta: random points per piece value (default 20)
-  --verbose            vp-meta/pld-meta: print every piece's value and budget, and times
+  --verbose            vp-meta/pld-meta/qem: print every piece's value and budget, and times
   --keep P%            keep P percent of the input vertices, 0 < P <= 100 (default 10%)
   --vertices N         keep N vertices instead (N >= 3)
   --max-error M        qem: keep the vertical error at every valid cell centre <= M (units
@@ -54,7 +57,7 @@ Simplifies a DEM (a band of any raster GDAL reads) into a TIN that preserves sur
   --t-srs CRS          output CRS (projected); default: the DEM's own CRS if projected,
                        the UTM zone of its centre if geographic
   --threads N          worker threads (default: all cores)
-  --tile-mb M          vp-meta/pld-meta: memory budget of one piece in MB (default 256);
+  --tile-mb M          vp-meta/pld-meta/qem: memory budget of one piece in MB (default 256);
                        peak memory is about threads x M plus the kept vertices. vp and pld
                        read the whole DEM
   --band B             the band holding the heights (default 1)

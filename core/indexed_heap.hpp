@@ -31,6 +31,16 @@ class IndexedMinHeap {
     for (std::size_t i = heap_.size() / 2; i-- > 0;) sift_down(i);
   }
 
+  // Appends (id, key) without ordering (id must be absent); heapify() then orders all at
+  // once, in O(n), with no temporary arrays.
+  void push_unordered(std::uint32_t id, double key) {
+    heap_.push_back({key, id});
+    pos_[id] = static_cast<std::uint32_t>(heap_.size() - 1);
+  }
+  void heapify() {
+    for (std::size_t i = heap_.size() / 2; i-- > 0;) sift_down(i);
+  }
+
   // Inserts id or changes its key.
   void set(std::uint32_t id, double key) {
     if (pos_[id] == kAbsent) {

@@ -73,6 +73,18 @@ std::vector<double> DemInfo::output_xy(const std::vector<std::uint32_t>& cells) 
 }
 
 std::vector<double> DemInfo::output_xy_of_grid(const std::vector<double>& grid) const {
+  return project_grid(grid, to_output.get());
+}
+
+std::vector<double> DemInfo::output_xy_of_grid_concurrent(const std::vector<double>& grid) const {
+  if (!to_output) return project_grid(grid, nullptr);
+  std::unique_ptr<OGRCoordinateTransformation, TransformDeleter> ct(to_output->Clone());
+  if (!ct) throw IoError(path + ": cannot copy the transformation to " + output_crs_name);
+  return project_grid(grid, ct.get());
+}
+
+std::vector<double> DemInfo::project_grid(const std::vector<double>& grid,
+                                          OGRCoordinateTransformation* to_output) const {
   const double* gt = geotransform;
   const std::size_t n = grid.size() / 2;
   std::vector<double> x(n), y(n);

@@ -66,6 +66,9 @@ struct DemInfo {
 
   // The same for any grid positions (col, row; cell centres at integers): x0, y0, ...
   std::vector<double> output_xy_of_grid(const std::vector<double>& grid_xy) const;
+  // The same, safe to call from concurrent tasks: with a transformation of its own (a copy
+  // made for the call).
+  std::vector<double> output_xy_of_grid_concurrent(const std::vector<double>& grid_xy) const;
 
   // Grid positions (col, row; cell centres at integers) of points given in the output CRS:
   // the inverse of output_xy. Throws IoError if the CRS transformation fails.
@@ -83,6 +86,10 @@ struct DemInfo {
 
   // The tolerance dpts-par uses for outline_chord_test: 1 % of a cell.
   double outline_tolerance_m() const;
+
+ private:
+  std::vector<double> project_grid(const std::vector<double>& grid_xy,
+                                   OGRCoordinateTransformation* ct) const;
 };
 
 // A DEM in memory: its description and all its heights (NaN = no-data).

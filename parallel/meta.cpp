@@ -4,10 +4,6 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#ifdef __GLIBC__
-#include <malloc.h>
-#endif
-
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -19,8 +15,8 @@
 #include <limits>
 #include <mutex>
 #include <optional>
-#include <string>
 #include <stdexcept>
+#include <string>
 
 #include "core/errors.hpp"
 #include "core/footprint.hpp"
@@ -28,6 +24,7 @@
 #include "core/piece_budget.hpp"
 #include "core/surface_sampling.hpp"
 #include "parallel/evaluate.hpp"
+#include "parallel/piece_support.hpp"
 
 namespace dpts::par {
 namespace {
@@ -42,43 +39,8 @@ std::uint64_t piece_seed(std::uint64_t seed, std::size_t piece) {
   return h ^ (h >> 31);
 }
 
-// Hands memory freed by a finished piece back to the system. glibc keeps freed heap memory
-// (a piece's triangulation is freed in thousands of blocks) for reuse; as kept-vertex outputs
-// accumulate between pieces, that retained memory fragments and the process grows with the
-// DEM although no more is live. Trimming after each piece keeps the footprint flat.
-void release_free_memory() {
-#ifdef __GLIBC__
-  malloc_trim(0);
-#endif
-}
+}  // namespace
 
-// Progress from concurrent tasks, serialized; remembers a refusal so every task stops.
-class SharedProgress {
- public:
-  SharedProgress(const core::Progress& progress, std::size_t parts)
-      : progress_(progress), partial_(parts, 0.0) {}
-  // Reports part i at fraction f of its work; false once the run is to stop.
-  bool update(std::size_t i, double f, std::string_view stage) {
-    if (stop_) return false;
-    std::lock_guard<std::mutex> hold(lock_);
-    sum_ += f - partial_[i];
-    partial_[i] = f;
-    if (progress_ && !progress_(sum_ / static_cast<double>(partial_.size()), stage)) stop_ = true;
-    return !stop_;
-  }
-  void check() const {
-    if (stop_) throw Cancelled();
-  }
-
- private:
-  const core::Progress& progress_;
-  std::vector<double> partial_;
-  double sum_ = 0;
-  std::mutex lock_;
-  std::atomic<bool> stop_{false};
-};
-
-// One streaming pass over the raster in strips of whole rows: surface vertices per block.
 core::BlockCounts count_blocks(const io::DemInfo& dem, std::size_t strip_bytes,
                                const core::Progress& progress, std::size_t* valid_cells,
                                std::size_t* absurd_cells) {
@@ -119,6 +81,8 @@ core::BlockCounts count_blocks(const io::DemInfo& dem, std::size_t strip_bytes,
   *absurd_cells = reader.absurd_cells();
   return bc;
 }
+
+namespace {
 
 // What a piece hands to the merge: the own vertices it kept after going `tail` removals
 // beyond its budget, those last removals in order (so the merge can take back any number of

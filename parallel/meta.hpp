@@ -73,6 +73,12 @@ struct MetaResult {
 MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
                          const core::Progress& progress, MetaStats* stats = nullptr);
 
+// One streaming pass over the raster in strips of whole rows (about strip_bytes each): surface
+// vertices per block, for the k-d division. Counts valid cells and absurd heights too.
+core::BlockCounts count_blocks(const io::DemInfo& dem, std::size_t strip_bytes,
+                               const core::Progress& progress, std::size_t* valid_cells,
+                               std::size_t* absurd_cells);
+
 // Peak resident memory of this process so far in kB (Linux VmHWM), 0 where unknown.
 std::size_t peak_rss_kb();
 // Resident memory of this process now in kB (Linux VmRSS), 0 where unknown.

@@ -1,0 +1,70 @@
+// dpts's own quadric edge collapse (`--algo qem`): Garland and Heckbert's greedy collapse with
+// triangle quadrics, a cost that also sees the change of surface area, a footprint kept
+// exactly (the outline's straight runs may thin out, its corners never move), no folds seen
+// from above, and vertices that may be locked (the seams between pieces of the piece engine).
+//
+// Written for terrain meshes: a compact indexed half-edge structure (three vertex ids and
+// three opposite half-edges per face), no per-collapse allocation, and the stars walked in
+// place. The semantics follow the CGAL-based qslim() with Outline::kStraightRunsFree
+// (core/qslim.hpp), which it replaces for qem; --algo qslim (the paper's competitor) keeps
+// CGAL's.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "core/elimination.hpp"
+#include "core/steiner_graph.hpp"
+
+namespace dpts::core {
+
+// A quadric error form: x^T A x + 2 b.x + c, A symmetric (a00 a01 a02 a11 a12 a22).
+struct Quadric {
+  double a00 = 0, a01 = 0, a02 = 0, a11 = 0, a12 = 0, a22 = 0, b0 = 0, b1 = 0, b2 = 0, c = 0;
+  // The squared distance to the plane n.x + d = 0, times |n|^2.
+  static Quadric plane(const double n[3], double d);
+  Quadric& operator+=(const Quadric& q);
+  double operator()(const double x[3]) const;
+};
+
+struct QemOptions {
+  // Weight of the squared change of the collapse's star 3D surface area, added to the quadric
+  // cost: a collapse that flattens or roughens the surface costs more.
+  double area_weight = 100.0;
+  // Per vertex: locked vertices never go and never move (a neighbour may collapse onto one).
+  // Border edges between two locked vertices get no outline quadric (they are seams, not
+  // outline). Empty: none.
+  std::vector<char> locked;
+  // Per vertex: the starting quadrics (a piece engine's merge carries them on). Empty: each
+  // vertex gets the triangle quadrics of its faces and the plane quadrics of its outline edges.
+  std::vector<Quadric> quadrics;
+  // Whether outline vertex v lies on a straight run from its outline neighbour a to b (input
+  // ids); null: a, v, b exactly collinear in x, y. (A reprojected DEM's mesh is in true
+  // output coordinates, where grid lines bend: its caller tests the grid instead.)
+  std::function<bool(std::uint32_t a, std::uint32_t v, std::uint32_t b)> outline_collinear;
+  // Whether the outline may run straight from vertex a to vertex b (input ids); null: always.
+  std::function<bool(std::uint32_t a, std::uint32_t b)> outline_chord_ok;
+  // Whether a triangle (corners a, b, c, counter-clockwise seen from above) may be made; null:
+  // always (--max-error's test).
+  std::function<bool(const double* a, const double* b, const double* c)> triangle_ok;
+};
+
+struct QemResult {
+  TriMesh mesh;                       // compacted, faces counter-clockwise
+  std::vector<std::uint32_t> source;  // per output vertex: its input vertex id
+  std::vector<Quadric> quadrics;      // per output vertex: its accumulated quadric
+  std::size_t input_vertices = 0, collapses = 0;
+  std::size_t refused = 0;  // collapses refused at the top of the queue (fold, topology, bound)
+};
+
+// Simplifies a height-field mesh (faces counter-clockwise seen from above; an edge has at most
+// two faces) by quadric edge collapse until at most `keep` vertices are left or no collapse
+// is allowed. Throws std::invalid_argument on a non-manifold edge, Cancelled when progress
+// returns false.
+// The mesh and options are taken by value: move them in to save their memory while it runs.
+QemResult qem_simplify(TriMesh mesh, std::size_t keep, QemOptions options = {},
+                       const Progress& progress = nullptr);
+
+}  // namespace dpts::core

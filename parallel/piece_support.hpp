@@ -1,0 +1,55 @@
+// What the piece engines (meta.cpp, qem_engine.cpp) share: progress from concurrent pieces,
+// and handing a finished piece's memory back.
+#pragma once
+
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+
+#include <atomic>
+#include <mutex>
+#include <string_view>
+#include <vector>
+
+#include "core/elimination.hpp"
+#include "core/errors.hpp"
+
+namespace dpts::par {
+
+// Hands memory freed by a finished piece back to the system. glibc keeps freed heap memory
+// (a piece's triangulation is freed in thousands of blocks) for reuse; as kept-vertex outputs
+// accumulate between pieces, that retained memory fragments and the process grows with the
+// DEM although no more is live. Trimming after each piece keeps the footprint flat.
+inline void release_free_memory() {
+#ifdef __GLIBC__
+  malloc_trim(0);
+#endif
+}
+
+// Progress from concurrent tasks, serialized; remembers a refusal so every task stops.
+class SharedProgress {
+ public:
+  SharedProgress(const core::Progress& progress, std::size_t parts)
+      : progress_(progress), partial_(parts, 0.0) {}
+  // Reports part i at fraction f of its work; false once the run is to stop.
+  bool update(std::size_t i, double f, std::string_view stage) {
+    if (stop_) return false;
+    std::lock_guard<std::mutex> hold(lock_);
+    sum_ += f - partial_[i];
+    partial_[i] = f;
+    if (progress_ && !progress_(sum_ / static_cast<double>(partial_.size()), stage)) stop_ = true;
+    return !stop_;
+  }
+  void check() const {
+    if (stop_) throw Cancelled();
+  }
+
+ private:
+  const core::Progress& progress_;
+  std::vector<double> partial_;
+  double sum_ = 0;
+  std::mutex lock_;
+  std::atomic<bool> stop_{false};
+};
+
+}  // namespace dpts::par

@@ -1,0 +1,328 @@
+// The piece engine for qem (see qem_engine.hpp).
+#include "parallel/qem_engine.hpp"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "core/errors.hpp"
+#include "core/kd_division.hpp"
+#include "core/qem.hpp"
+#include "core/surface_sampling.hpp"
+#include "parallel/piece_support.hpp"
+
+namespace dpts::par {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Where the mesh's vertices lie while it is simplified. A DEM in its own CRS: the frame, exact
+// and linear (grid lines stay exactly straight). A reprojected DEM: its cells' true positions
+// in the output CRS, scaled to frame units from cell (0, 0)'s: the frame is only a linear
+// stand-in there, and a collapse's thin triangles, unfolded in the frame, came out folded in
+// the output (295 faces on olympic_srtm1 to 10 %). Folds are tested where they matter.
+struct Positions {
+  const io::DemInfo* dem = nullptr;
+  bool projected = false;
+  double ox = 0, oy = 0, scale = 1;  // frame units = (output - o) * scale
+
+  explicit Positions(const io::DemInfo& d) : dem(&d), projected(d.to_output != nullptr) {
+    if (!projected) return;
+    const std::vector<double> o = d.output_xy_of_grid({0.0, 0.0});
+    ox = o[0], oy = o[1];
+    scale = d.metres_per_output_unit / d.frame.metres_per_unit;
+  }
+  // x, y of cells (col, row pairs) in frame units; safe from concurrent tasks.
+  std::vector<double> of(const std::vector<double>& grid_xy) const {
+    std::vector<double> xy(grid_xy.size());
+    if (!projected) {
+      for (std::size_t i = 0; 2 * i < grid_xy.size(); ++i) {
+        const int c = static_cast<int>(grid_xy[2 * i]), r = static_cast<int>(grid_xy[2 * i + 1]);
+        xy[2 * i] = dem->frame.u(c, r);
+        xy[2 * i + 1] = dem->frame.w(c, r);
+      }
+      return xy;
+    }
+    xy = dem->output_xy_of_grid_concurrent(grid_xy);
+    for (std::size_t i = 0; 2 * i < xy.size(); ++i) {
+      xy[2 * i] = (xy[2 * i] - ox) * scale;
+      xy[2 * i + 1] = (xy[2 * i + 1] - oy) * scale;
+    }
+    return xy;
+  }
+  // The mesh in the output CRS (heights in metres).
+  void to_output(core::TriMesh& mesh) const {
+    const double unit = dem->frame.metres_per_unit;
+    const std::size_t n = mesh.vertex_count();
+    if (projected) {
+      for (std::size_t v = 0; v < n; ++v) {
+        mesh.xyz[3 * v] = ox + mesh.xyz[3 * v] / scale;
+        mesh.xyz[3 * v + 1] = oy + mesh.xyz[3 * v + 1] / scale;
+        mesh.xyz[3 * v + 2] *= unit;
+      }
+      return;
+    }
+    double inv[2][2];
+    dem->frame.inverse(inv);
+    std::vector<double> grid_xy(2 * n);
+    for (std::size_t v = 0; v < n; ++v) {
+      const double u = mesh.xyz[3 * v], w = mesh.xyz[3 * v + 1];
+      grid_xy[2 * v] = inv[0][0] * u + inv[0][1] * w;
+      grid_xy[2 * v + 1] = inv[1][0] * u + inv[1][1] * w;
+    }
+    const std::vector<double> xy = dem->output_xy_of_grid(grid_xy);
+    for (std::size_t v = 0; v < n; ++v) {
+      mesh.xyz[3 * v] = xy[2 * v];
+      mesh.xyz[3 * v + 1] = xy[2 * v + 1];
+      mesh.xyz[3 * v + 2] *= unit;
+    }
+  }
+  // With projected positions: the outline test of collinearity on the grid (cells given as
+  // col, row of a window `width` wide), where the outline's runs are straight.
+  std::function<bool(std::uint32_t, std::uint32_t, std::uint32_t)> collinear(
+      const std::vector<std::uint32_t>* cells, std::uint32_t width) const {
+    if (!projected) return nullptr;
+    return [cells, width](std::uint32_t a, std::uint32_t v, std::uint32_t b) {
+      auto at = [&](std::uint32_t i, long& c, long& r) {
+        c = static_cast<long>((*cells)[i] % width);
+        r = static_cast<long>((*cells)[i] / width);
+      };
+      long ca, ra, cv, rv, cb, rb;
+      at(a, ca, ra), at(v, cv, rv), at(b, cb, rb);
+      return (cv - ca) * (rb - ra) - (rv - ra) * (cb - ca) == 0;
+    };
+  }
+};
+
+// What a piece hands to the merge.
+struct PieceMesh {
+  core::TriMesh mesh;  // frame units
+  std::vector<core::Quadric> quadrics;
+  std::vector<std::uint32_t> cell;  // per vertex: its raster cell (where it started)
+  std::vector<char> seam;           // per vertex: shared with another piece's window
+  std::size_t bytes() const {
+    return mesh.xyz.capacity() * sizeof(double) + mesh.faces.capacity() * sizeof(mesh.faces[0]) +
+           quadrics.capacity() * sizeof(core::Quadric) + cell.capacity() * sizeof(std::uint32_t) +
+           seam.capacity();
+  }
+};
+
+PieceMesh simplify_piece(const io::DemInfo& dem, const Positions& positions, const core::Piece& p,
+                         double fraction, const QemEngineOptions& options, PieceReport& report,
+                         const core::Progress& progress) {
+  // The piece's cells and one more column and row (the next pieces' first): the grid squares
+  // whose top-left corner is the piece's.
+  const int wc0 = p.col0, wr0 = p.row0;
+  const int wc1 = std::min(dem.width, p.col0 + p.width + 1);
+  const int wr1 = std::min(dem.height, p.row0 + p.height + 1);
+  const int ww = wc1 - wc0, wh = wr1 - wr0;
+  auto t0 = std::chrono::steady_clock::now();
+  core::HeightGrid grid;
+  {
+    io::WindowReader reader(dem);
+    grid = reader.read(wc0, wr0, ww, wh);
+  }
+  report.read_s = seconds_since(t0);
+  t0 = std::chrono::steady_clock::now();
+  const core::GridTin tin = core::grid_tin(grid, core::delaunay_diagonal(dem.frame));
+  PieceMesh out;
+  if (tin.faces.empty()) return out;
+  const double unit = dem.frame.metres_per_unit;
+  core::TriMesh mesh;
+  std::vector<double> grid_xy(2 * tin.cells.size());
+  for (std::size_t v = 0; v < tin.cells.size(); ++v) {
+    grid_xy[2 * v] = wc0 + static_cast<int>(tin.cells[v] % static_cast<std::uint32_t>(ww));
+    grid_xy[2 * v + 1] = wr0 + static_cast<int>(tin.cells[v] / static_cast<std::uint32_t>(ww));
+  }
+  const std::vector<double> xy = positions.of(grid_xy);
+  grid_xy = {};
+  mesh.xyz.resize(3 * tin.cells.size());
+  core::QemOptions qo;
+  qo.locked.assign(tin.cells.size(), 0);
+  std::size_t locked = 0;
+  for (std::size_t v = 0; v < tin.cells.size(); ++v) {
+    const int c = static_cast<int>(tin.cells[v] % static_cast<std::uint32_t>(ww));
+    const int r = static_cast<int>(tin.cells[v] / static_cast<std::uint32_t>(ww));
+    mesh.xyz[3 * v] = xy[2 * v];
+    mesh.xyz[3 * v + 1] = xy[2 * v + 1];
+    mesh.xyz[3 * v + 2] = grid.z[tin.cells[v]] / unit;
+    // A window side inside the raster is a seam: another window has its cells too.
+    const bool seam = (c == 0 && wc0 > 0) || (c == ww - 1 && wc1 < dem.width) ||
+                      (r == 0 && wr0 > 0) || (r == wh - 1 && wr1 < dem.height);
+    qo.locked[v] = seam ? 1 : 0;
+    locked += seam ? 1 : 0;
+  }
+  mesh.faces = tin.faces;
+  core::fix_orientation(mesh);
+  qo.outline_collinear = positions.collinear(&tin.cells, static_cast<std::uint32_t>(ww));
+  const auto chord = dem.outline_chord_test(dem.outline_tolerance_m(), wc0, wr0, ww);
+  if (chord) {
+    qo.outline_chord_ok = [&tin, &chord](std::uint32_t a, std::uint32_t b) {
+      return chord(tin.cells[a], tin.cells[b]);
+    };
+  }
+  const std::size_t n = tin.cells.size();
+  const std::size_t keep = std::min<std::size_t>(
+      n, locked + static_cast<std::size_t>(
+                      std::ceil(options.slack * fraction * static_cast<double>(n - locked))));
+  grid = {};
+  const std::vector<char> seam = qo.locked;
+  core::QemResult r = core::qem_simplify(std::move(mesh), keep, std::move(qo), progress);
+  out.mesh = std::move(r.mesh);
+  out.quadrics = std::move(r.quadrics);
+  out.cell.resize(r.source.size());
+  out.seam.resize(r.source.size());
+  for (std::size_t v = 0; v < r.source.size(); ++v) {
+    const std::uint32_t local = tin.cells[r.source[v]];
+    const auto c = static_cast<std::uint32_t>(wc0) + local % static_cast<std::uint32_t>(ww);
+    const auto row = static_cast<std::uint32_t>(wr0) + local / static_cast<std::uint32_t>(ww);
+    out.cell[v] = row * static_cast<std::uint32_t>(dem.width) + c;
+    out.seam[v] = seam[r.source[v]];
+  }
+  out.mesh.xyz.shrink_to_fit();
+  out.mesh.faces.shrink_to_fit();
+  out.quadrics.shrink_to_fit();
+  report.budget = keep;
+  report.kept = out.cell.size();
+  report.simplify_s = seconds_since(t0);
+  return out;
+}
+
+}  // namespace
+
+core::TriMesh simplify_qem(const io::DemInfo& dem, const QemEngineOptions& options,
+                           const core::Progress& progress, MetaStats* stats) {
+  MetaStats local;
+  MetaStats& st = stats ? *stats : local;
+  const auto bytes = options.tile_bytes;
+
+  // 1. Count surface vertices per block, streaming; divide.
+  auto t0 = std::chrono::steady_clock::now();
+  const core::BlockCounts bc = count_blocks(dem, std::max<std::size_t>(bytes / 4, 1 << 20),
+                                            progress, &st.valid_cells, &st.absurd_cells);
+  st.block = bc.block;
+  st.count_s = seconds_since(t0);
+  if (st.valid_cells == 0) throw InputError(io::all_nodata_message(dem));
+  core::DivisionOptions div;
+  div.levels = options.levels;
+  div.budget_bytes = bytes;
+  div.halo = 1;
+  const core::GridFrame& f = dem.frame;
+  div.col_metres = f.metres_per_unit * std::hypot(f.m[0][0], f.m[1][0]);
+  div.row_metres = f.metres_per_unit * std::hypot(f.m[0][1], f.m[1][1]);
+  const std::vector<core::Piece> pieces = core::kd_divide(bc, div);
+  std::size_t total = 0;
+  for (const auto& p : pieces) total += p.vertices;
+  if (total < 3) throw InputError(dem.path + ": " + kNothingToTriangulate);
+  st.input_vertices = total;
+  st.target_vertices = target_count(options.keep, total);
+  const double fraction = static_cast<double>(st.target_vertices) / static_cast<double>(total);
+  if (options.memory_limit_bytes > 0) {
+    const std::size_t in_flight = std::min<std::size_t>(
+        pieces.size(), static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()));
+    const double kept = std::min(1.0, options.slack * fraction) * static_cast<double>(total);
+    const std::size_t need =
+        static_cast<std::size_t>(kept * kQemBytesPerKeptVertex) + bytes * in_flight;
+    if (need > options.memory_limit_bytes) {
+      throw InputError(dem.path + ": keeping " + std::to_string(st.target_vertices) +
+                       " vertices needs about " + format_bytes(static_cast<double>(need)) +
+                       ", more than the " +
+                       format_bytes(static_cast<double>(options.memory_limit_bytes)) +
+                       " available; keep fewer (--keep, --vertices) or use a smaller --tile-mb");
+    }
+  }
+  st.pieces.assign(pieces.size(), {});
+  for (std::size_t i = 0; i < pieces.size(); ++i) st.pieces[i].piece = pieces[i];
+
+  // 2. Simplify the pieces concurrently, seams locked.
+  t0 = std::chrono::steady_clock::now();
+  const Positions positions(dem);
+  std::vector<PieceMesh> outputs(pieces.size());
+  {
+    SharedProgress shared(progress, pieces.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pieces.size(), 1),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                          shared.check();
+                          const core::Progress piece_progress = [&](double fr, std::string_view) {
+                            return shared.update(i, fr, "simplify");
+                          };
+                          outputs[i] = simplify_piece(dem, positions, pieces[i], fraction, options,
+                                                      st.pieces[i], piece_progress);
+                          release_free_memory();
+                          shared.update(i, 1.0, "simplify");
+                        }
+                      });
+    shared.check();
+  }
+  st.simplify_s = seconds_since(t0);
+  st.peak_rss_before_merge_kb = peak_rss_kb();
+  for (const auto& o : outputs) st.kept_bytes += o.bytes();
+
+  // 3. Stitch at the seams (in k-d order), then collapse on to the target in one order.
+  t0 = std::chrono::steady_clock::now();
+  if (progress && !progress(0.0, "merge")) throw Cancelled();
+  core::TriMesh merged;
+  core::QemOptions qo;
+  std::vector<std::uint32_t> cell;
+  std::unordered_map<std::uint32_t, std::uint32_t> seam_vertex;
+  {
+    // Sized once: growing by doubling would briefly hold twice the merge's largest arrays.
+    std::size_t vertices = 0, faces = 0;
+    for (const PieceMesh& o : outputs) vertices += o.cell.size(), faces += o.mesh.faces.size();
+    merged.xyz.reserve(3 * vertices);
+    merged.faces.reserve(faces);
+    qo.quadrics.reserve(vertices);
+    cell.reserve(vertices);
+  }
+  for (PieceMesh& o : outputs) {
+    std::vector<std::uint32_t> id(o.cell.size());
+    for (std::size_t v = 0; v < o.cell.size(); ++v) {
+      if (o.seam[v]) {
+        const auto [it, fresh] =
+            seam_vertex.emplace(o.cell[v], static_cast<std::uint32_t>(cell.size()));
+        id[v] = it->second;
+        if (!fresh) {
+          qo.quadrics[it->second] += o.quadrics[v];
+          continue;
+        }
+      } else {
+        id[v] = static_cast<std::uint32_t>(cell.size());
+      }
+      cell.push_back(o.cell[v]);
+      merged.xyz.insert(merged.xyz.end(), o.mesh.xyz.begin() + 3 * v,
+                        o.mesh.xyz.begin() + 3 * v + 3);
+      qo.quadrics.push_back(o.quadrics[v]);
+    }
+    for (const auto& t : o.mesh.faces) merged.faces.push_back({id[t[0]], id[t[1]], id[t[2]]});
+    o = {};
+  }
+  seam_vertex = {};
+  qo.outline_collinear = positions.collinear(&cell, static_cast<std::uint32_t>(dem.width));
+  const auto chord = dem.outline_chord_test(dem.outline_tolerance_m());
+  if (chord) {
+    qo.outline_chord_ok = [&cell, &chord](std::uint32_t a, std::uint32_t b) {
+      return chord(cell[a], cell[b]);
+    };
+  }
+  const core::Progress merge_progress = [&](double fr, std::string_view) {
+    return !progress || progress(fr, "merge");
+  };
+  core::QemResult r =
+      core::qem_simplify(std::move(merged), st.target_vertices, std::move(qo), merge_progress);
+  st.kept_vertices = r.mesh.vertex_count();
+  positions.to_output(r.mesh);
+  st.merge_s = seconds_since(t0);
+  return std::move(r.mesh);
+}
+
+}  // namespace dpts::par

@@ -1,0 +1,179 @@
+// dpts's quadric edge collapse (qem): exact count, no folds, the footprint kept exactly on
+// fewer outline vertices, the chord test asked, locked vertices untouched, quadrics carried.
+#include "core/qem.hpp"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+
+#include "core/footprint.hpp"
+#include "core/mesh_check.hpp"
+#include "core/surface_sampling.hpp"
+#include "test_support.hpp"
+
+using namespace dpts;
+
+namespace {
+
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Hills with a void, a notch and a cut corner; vertices at (col, -row) so faces are
+// counter-clockwise after fix_orientation.
+core::TriMesh hills_mesh(int w = 40, int h = 32) {
+  const auto g = test::make_grid(w, h, [w, h](int c, int r) {
+    if (std::hypot(c - 12.0, r - 14.0) < 4.0) return kNaN;
+    if (c >= w - 6 && r >= h / 2 - 2 && r <= h / 2 + 2) return kNaN;
+    if (c + r < 3) return kNaN;
+    return 10.0 * std::sin(c * 0.3) * std::cos(r * 0.25) + 0.3 * c;
+  });
+  const core::GridTin tin = core::grid_tin(g);
+  core::TriMesh m;
+  for (std::uint32_t cell : tin.cells) {
+    const double c = cell % static_cast<std::uint32_t>(w), r = cell / static_cast<std::uint32_t>(w);
+    m.xyz.insert(m.xyz.end(), {c, -r, g.z[cell]});
+  }
+  m.faces = tin.faces;
+  core::fix_orientation(m);
+  return m;
+}
+
+// Positions (x, y) of the vertices on the mesh's border.
+std::set<std::pair<double, double>> border(const core::TriMesh& m) {
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> uses;
+  for (const auto& f : m.faces) {
+    for (int i = 0; i < 3; ++i) {
+      const auto a = f[i], b = f[(i + 1) % 3];
+      ++uses[{std::min(a, b), std::max(a, b)}];
+    }
+  }
+  std::set<std::pair<double, double>> out;
+  for (const auto& [e, n] : uses) {
+    if (n != 1) continue;
+    for (auto v : {e.first, e.second}) out.insert({m.xyz[3 * v], m.xyz[3 * v + 1]});
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("qem keeps the count and the footprint on fewer outline vertices, no folds",
+          "[core][qem]") {
+  const core::TriMesh in = hills_mesh();
+  const auto in_border = border(in);
+  const double in_area = core::mesh_area(core::xy_of(in.xyz), in.faces);
+  for (std::size_t keep : {in.vertex_count() / 2, in.vertex_count() / 10}) {
+    INFO("keep " << keep);
+    const core::QemResult r = core::qem_simplify(in, keep);
+    const core::TriMesh& out = r.mesh;
+    CHECK(out.vertex_count() == keep);
+    CHECK(r.input_vertices == in.vertex_count());
+    CHECK(r.collapses == in.vertex_count() - keep);
+    REQUIRE(r.source.size() == keep);
+    REQUIRE(r.quadrics.size() == keep);
+    const core::MeshCheck mc = core::check_mesh(core::xy_of(out.xyz), out.faces);
+    CHECK(mc.clockwise_or_flat == 0);
+    CHECK(mc.bad_edges == 0);
+    CHECK(mc.area == Approx(in_area).epsilon(1e-12));
+    const auto out_border = border(out);
+    for (const auto& p : out_border) CHECK(in_border.count(p) == 1);
+    CHECK(out_border.size() <
+          (keep < in.vertex_count() / 5 ? in_border.size() / 2 : in_border.size()));
+    for (std::pair<double, double> corner : {std::pair{39.0, 0.0}, {0.0, -31.0}, {39.0, -31.0}}) {
+      CHECK(out_border.count(corner) == 1);
+    }
+    // A vertex on the border never moved: it is where its source vertex was.
+    for (std::size_t v = 0; v < keep; ++v) {
+      if (out_border.count({out.xyz[3 * v], out.xyz[3 * v + 1]}) == 0) continue;
+      CHECK(out.xyz[3 * v] == in.xyz[3 * r.source[v]]);
+      CHECK(out.xyz[3 * v + 1] == in.xyz[3 * r.source[v] + 1]);
+      CHECK(out.xyz[3 * v + 2] == in.xyz[3 * r.source[v] + 2]);
+    }
+  }
+}
+
+TEST_CASE("qem asks the chord test and keeps the outline when it refuses", "[core][qem]") {
+  const core::TriMesh in = hills_mesh();
+  core::QemOptions options;
+  std::size_t asked = 0;
+  options.outline_chord_ok = [&](std::uint32_t a, std::uint32_t b) {
+    ++asked;
+    CHECK(a < in.vertex_count());
+    CHECK(b < in.vertex_count());
+    return false;
+  };
+  const core::QemResult r = core::qem_simplify(in, in.vertex_count() / 5, options);
+  CHECK(asked > 0);
+  CHECK(border(r.mesh) == border(in));
+}
+
+TEST_CASE("qem never moves or removes a locked vertex", "[core][qem]") {
+  const core::TriMesh in = hills_mesh();
+  core::QemOptions options;
+  options.locked.assign(in.vertex_count(), 0);
+  std::set<std::uint32_t> locked;
+  // A column of vertices through the middle (a seam), and every 7th vertex.
+  for (std::uint32_t v = 0; v < in.vertex_count(); ++v) {
+    if (in.xyz[3 * v] == 20.0 || v % 7 == 0) options.locked[v] = 1, locked.insert(v);
+  }
+  const core::QemResult r = core::qem_simplify(in, in.vertex_count() / 4, options);
+  std::size_t found = 0;
+  for (std::size_t v = 0; v < r.source.size(); ++v) {
+    if (!locked.count(r.source[v])) continue;
+    ++found;
+    for (int k = 0; k < 3; ++k) CHECK(r.mesh.xyz[3 * v + k] == in.xyz[3 * r.source[v] + k]);
+  }
+  CHECK(found == locked.size());
+  const core::MeshCheck mc = core::check_mesh(core::xy_of(r.mesh.xyz), r.mesh.faces);
+  CHECK(mc.clockwise_or_flat == 0);
+  CHECK(mc.bad_edges == 0);
+}
+
+TEST_CASE("qem refuses a triangle the bound refuses, and goes on with the others", "[core][qem]") {
+  const core::TriMesh in = hills_mesh();
+  core::QemOptions options;
+  std::size_t asked = 0;
+  // Refuse every triangle wider than 6 units: the mesh cannot go below some count.
+  options.triangle_ok = [&](const double* a, const double* b, const double* c) {
+    ++asked;
+    for (const double* p : {a, b, c}) {
+      for (const double* q : {a, b, c}) {
+        if (std::hypot(p[0] - q[0], p[1] - q[1]) > 6.0) return false;
+      }
+    }
+    return true;
+  };
+  const core::QemResult r = core::qem_simplify(in, 3, options);
+  CHECK(asked > 0);
+  CHECK(r.refused > 0);
+  CHECK(r.mesh.vertex_count() > 3);
+  for (const auto& f : r.mesh.faces) {
+    for (int i = 0; i < 3; ++i) {
+      const double* p = &r.mesh.xyz[3 * f[i]];
+      const double* q = &r.mesh.xyz[3 * f[(i + 1) % 3]];
+      CHECK(std::hypot(p[0] - q[0], p[1] - q[1]) <= 6.0 + 1e-9);
+    }
+  }
+}
+
+TEST_CASE("qem's quadrics are the sum of its faces' and its outline edges'", "[core][qem]") {
+  // A flat unit square of 2 triangles at z = 5, nothing collapsed.
+  core::TriMesh in;
+  in.xyz = {0, 0, 5, 1, 0, 5, 1, 1, 5, 0, 1, 5};
+  in.faces = {{0, 1, 2}, {0, 2, 3}};
+  const core::QemResult r = core::qem_simplify(in, 4);
+  REQUIRE(r.quadrics.size() == 4);
+  for (std::size_t v = 0; v < 4; ++v) {
+    // Zero at the vertex itself: it lies on every plane of its quadric.
+    CHECK(r.quadrics[v](&in.xyz[3 * v]) == Approx(0).margin(1e-12));
+  }
+  // 1 m above vertex 0: its two faces' planes, each weighted by its doubled area squared
+  // (1 x 1), give 2; its outline edges' planes are vertical and give nothing.
+  const double above[3] = {0, 0, 6};
+  CHECK(r.quadrics[0](above) == Approx(2.0));
+  // 1 m outside the square's west side, at vertex 0's height: only the west edge's plane
+  // (weight 1) sees it.
+  const double west[3] = {-1, 0, 5};
+  CHECK(r.quadrics[0](west) == Approx(1.0));
+}

@@ -1,0 +1,115 @@
+// qem's piece engine: the exact count, the footprint covered once across piece seams (no
+// crack, no overlap, no vertex twice), no fold in the output CRS also for a reprojected DEM,
+// and the same mesh for any thread count.
+#include "parallel/qem_engine.hpp"
+
+#include <gdal_priv.h>
+#include <tbb/global_control.h>
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <limits>
+#include <set>
+
+#include "core/mesh_check.hpp"
+#include "core/surface_sampling.hpp"
+#include "test_support.hpp"
+
+using namespace dpts;
+
+namespace {
+
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Hills with voids across the first split lines (as meta_test's).
+core::HeightGrid hills(int w = 96, int h = 80) {
+  return test::make_grid(w, h, [w, h](int c, int r) {
+    if (std::hypot(c - w / 2.0, r - h / 2.0) < 7.0) return kNaN;
+    if (r == h / 4 && c >= 6 && c < w - 20) return kNaN;
+    if (c >= w - 6 && r >= h / 2 + 10 && r <= h / 2 + 14) return kNaN;
+    if (c + r < 3) return kNaN;
+    return 100.0 + 20.0 * std::sin(c * 0.3) * std::cos(r * 0.25) + 0.5 * c + 0.01 * r * r;
+  });
+}
+
+struct Fixture {
+  test::TempDir dir;
+  std::string path = (dir / "hills.tif").string();
+  io::DemInfo info;
+  double area = 0;  // the full-resolution TIN's, in the output CRS
+  explicit Fixture(bool geographic) {
+    GDALAllRegister();
+    if (geographic) {
+      // 1 degree by 0.8 at 48 N: the grid lines bend in UTM.
+      test::write_geotiff(path, hills(), {-124.0, 1.0 / 96, 0, 48.8, 0, -0.8 / 80}, "EPSG:4326");
+    } else {
+      test::write_geotiff(path, hills(), {500000, 30, 0, 4100000, 0, -30}, "");
+    }
+    info = io::open_dem(path, {});
+    const core::TriMesh full = io::read_dem(path, {}, nullptr).grid_mesh();
+    area = core::mesh_area(core::xy_of(full.xyz), full.faces);
+  }
+};
+
+par::QemEngineOptions options(std::size_t keep) {
+  par::QemEngineOptions o;
+  o.keep.vertices = keep;
+  o.levels = 4;
+  o.tile_bytes = 64 << 10;
+  return o;
+}
+
+void check_cover(const core::TriMesh& m, double area) {
+  const core::MeshCheck mc = core::check_mesh(core::xy_of(m.xyz), m.faces);
+  CHECK(mc.clockwise_or_flat == 0);
+  CHECK(mc.bad_edges == 0);
+  CHECK(mc.area == Approx(area).epsilon(1e-6));
+  // A seam vertex stitched once: no two vertices at one place.
+  std::set<std::pair<double, double>> at;
+  for (std::size_t v = 0; v < m.vertex_count(); ++v) at.insert({m.xyz[3 * v], m.xyz[3 * v + 1]});
+  CHECK(at.size() == m.vertex_count());
+}
+
+}  // namespace
+
+TEST_CASE("qem's piece engine keeps the count and covers the footprint once across seams",
+          "[parallel][qem]") {
+  const bool geographic = GENERATE(false, true);
+  INFO((geographic ? "geographic" : "projected"));
+  Fixture fx(geographic);
+  for (double share : {0.3, 0.1}) {
+    par::MetaStats stats;
+    const std::size_t keep = static_cast<std::size_t>(share * 6000);
+    const core::TriMesh m = par::simplify_qem(fx.info, options(keep), nullptr, &stats);
+    CHECK(stats.pieces.size() >= 16);
+    CHECK(m.vertex_count() == keep);
+    CHECK(stats.kept_vertices == keep);
+    std::size_t kept = 0;
+    for (const auto& p : stats.pieces) kept += p.kept;
+    CHECK(kept > keep);  // the pieces leave the merge a choice
+    // Every vertex near the surface: its height within the DEM's range (80 to 232 m), give
+    // or take what an optimal placement may overshoot.
+    for (std::size_t v = 0; v < m.vertex_count(); ++v) {
+      CHECK(m.xyz[3 * v + 2] > 70.0);
+      CHECK(m.xyz[3 * v + 2] < 245.0);
+    }
+    // In the output CRS: a reprojected DEM's mesh must not fold there either.
+    check_cover(m, fx.area);
+  }
+}
+
+TEST_CASE("qem's piece engine gives the same mesh for 1, 2 and 4 threads",
+          "[parallel][qem][determinism]") {
+  Fixture fx(false);
+  auto run = [&](int threads) {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism,
+                          static_cast<std::size_t>(threads));
+    return par::simplify_qem(fx.info, options(600), nullptr);
+  };
+  const core::TriMesh a = run(1);
+  for (int threads : {2, 4}) {
+    const core::TriMesh b = run(threads);
+    CHECK(a.xyz == b.xyz);
+    CHECK(a.faces == b.faces);
+  }
+}
