@@ -197,9 +197,8 @@ int run_qslim(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printe
   const std::size_t input = grid.vertex_count();
   const std::size_t target = par::target_count(o.keep, input);
   core::QslimStats stats;
-  core::QslimOptions qo;
+  core::QemOptions qo;
   if (o.free_outline) {
-    qo.outline = core::Outline::kStraightRunsFree;
     // A reprojected DEM's outline is straight in the frame, curved in the output CRS: a chord
     // may stray from it by the outline tolerance at most, as in the elimination.
     const auto chord_ok = dem.outline_chord_test(dem.outline_tolerance_m());
@@ -257,16 +256,13 @@ int run_qslim(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printe
   }
   core::TriMesh result;
   if (o.free_outline) {
-    core::QemOptions qe;
-    qe.outline_chord_ok = qo.outline_chord_ok;
-    qe.triangle_ok = qo.triangle_ok;
-    core::QemResult r = core::qem_simplify(std::move(grid), target, std::move(qe));
+    core::QemResult r = core::qem_simplify(std::move(grid), target, std::move(qo));
     result = std::move(r.mesh);
     stats.input_vertices = r.input_vertices;
     stats.kept_vertices = result.vertex_count();
     stats.rejected_folds = r.refused;
   } else {
-    result = core::qslim(grid, target, &stats, qo);
+    result = core::qslim(grid, target, &stats);
   }
   if (!progress(1.0, o.algo_text.c_str())) throw Cancelled();
   printer.finish();

@@ -252,6 +252,11 @@ class Collapser {
       q_ = std::move(o_.quadrics);
       return;
     }
+    // Triangle quadrics (the squared distance to each whole triangle's plane, weighted by its
+    // size) and the outline's quadrics at weight 1: the outline cannot move anyway. On
+    // st_helens_crater, 60 points x 3 sets, error x1e-4 at 10/30/50/70 %: plane quadrics,
+    // outline weight 100: 18.5/5.68/2.72/1.21; triangle, 100: 18.3/5.75/2.56/1.09; triangle, 1:
+    // 17.5/5.74/2.57/1.08 (probabilistic triangle quadrics: 66.8 at 10 %).
     q_.assign(n, Quadric{});
     for (std::uint32_t f = 0; 3 * f < fv_.size(); ++f) {
       const double* a = pos(fv_[3 * f]);

@@ -5,8 +5,8 @@
 //
 // Written for terrain meshes: a compact indexed half-edge structure (three vertex ids and
 // three opposite half-edges per face), no per-collapse allocation, and the stars walked in
-// place. The semantics follow the CGAL-based qslim() with Outline::kStraightRunsFree
-// (core/qslim.hpp), which it replaces for qem; --algo qslim (the paper's competitor) keeps
+// place. It replaced a CGAL EdgeCollapse version of the same rules (same errors, a quarter of
+// the time: docs/results.md); --algo qslim (the paper's competitor, core/qslim.hpp) keeps
 // CGAL's.
 #pragma once
 

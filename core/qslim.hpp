@@ -12,8 +12,6 @@
 #pragma once
 
 #include <cstddef>
-#include <cstdint>
-#include <functional>
 
 #include "core/steiner_graph.hpp"
 
@@ -28,30 +26,8 @@ struct QslimStats {
   std::size_t rejected_folds = 0;  // collapses refused because a triangle would fold
 };
 
-// What a collapse may do to the outline of the footprint.
-enum class Outline {
-  kLocked,  // no vertex of it moves or goes (the paper's comparison)
-  // A vertex where the outline runs straight on (collinear seen from above with its two
-  // outline neighbours, exactly) may go, collapsed onto one of those neighbours: the footprint
-  // stays exactly the same, and the vertices a rectangle's sides held go to the interior.
-  kStraightRunsFree,
-};
-
-struct QslimOptions {
-  Outline outline = Outline::kLocked;
-  // With kStraightRunsFree: whether the outline may run straight from vertex a to vertex b
-  // (mesh vertex ids), for a mesh whose coordinates are a linear stand-in for the output CRS
-  // (a reprojected DEM's frame); null: always.
-  std::function<bool(std::uint32_t a, std::uint32_t b)> outline_chord_ok;
-  // Whether a triangle (corners a, b, c, counter-clockwise seen from above) may be made: a
-  // collapse after which any triangle of its star fails is refused (a bound on the vertical
-  // error, --max-error). Null: always.
-  std::function<bool(const double* a, const double* b, const double* c)> triangle_ok;
-};
-
 // Simplifies a triangle mesh (counter-clockwise faces seen from above, in metres) to `keep`
-// vertices, or as few as the outline rule and the fold rule allow. Returns the new mesh.
-TriMesh qslim(const TriMesh& mesh, std::size_t keep, QslimStats* stats = nullptr,
-              const QslimOptions& options = {});
+// vertices, or as few as the locked border and the fold rule allow. Returns the new mesh.
+TriMesh qslim(const TriMesh& mesh, std::size_t keep, QslimStats* stats = nullptr);
 
 }  // namespace dpts::core

@@ -1,5 +1,4 @@
-// QSlim baseline: exact count, the outline locked, no folds, the footprint covered once; and
-// with the outline's straight runs free: the same footprint on fewer outline vertices.
+// QSlim baseline: exact count, the outline locked, no folds, the footprint covered once.
 #include "core/qslim.hpp"
 
 #include <catch2/catch.hpp>
@@ -84,51 +83,4 @@ TEST_CASE("QSlim cannot go below the locked outline", "[core][qslim]") {
   CHECK(out.vertex_count() >= outline);
   CHECK(out.vertex_count() < outline + outline / 2);
   CHECK(stats.rejected_folds > 0);
-}
-
-TEST_CASE("QSlim with straight outline runs free keeps the footprint on fewer outline vertices",
-          "[core][qslim]") {
-  const core::TriMesh in = hills_mesh();
-  const auto in_border = border(in);
-  const double in_area = core::mesh_area(core::xy_of(in.xyz), in.faces);
-  core::QslimOptions options;
-  options.outline = core::Outline::kStraightRunsFree;
-  for (std::size_t keep : {in.vertex_count() / 2, in.vertex_count() / 10}) {
-    INFO("keep " << keep);
-    core::QslimStats stats;
-    const core::TriMesh out = core::qslim(in, keep, &stats, options);
-    CHECK(out.vertex_count() == keep);
-    const core::MeshCheck mc = core::check_mesh(core::xy_of(out.xyz), out.faces);
-    CHECK(mc.clockwise_or_flat == 0);
-    CHECK(mc.bad_edges == 0);
-    // The same region (no fold, the same area, the outline's vertices never moved), held by
-    // fewer outline vertices: the hills' outline is mostly straight runs.
-    CHECK(mc.area == Approx(in_area).epsilon(1e-12));
-    const auto out_border = border(out);
-    for (const auto& p : out_border) CHECK(in_border.count(p) == 1);
-    // At a tenth the budget is tight and most of the straight runs go.
-    CHECK(out_border.size() <
-          (keep < in.vertex_count() / 5 ? in_border.size() / 2 : in_border.size()));
-    // The corners stay: those of the rectangle and of the notch.
-    for (std::pair<double, double> corner : {std::pair{39.0, 0.0}, {0.0, -31.0}, {39.0, -31.0}}) {
-      CHECK(out_border.count(corner) == 1);
-    }
-  }
-}
-
-TEST_CASE("QSlim with straight outline runs free asks the chord test", "[core][qslim]") {
-  const core::TriMesh in = hills_mesh();
-  core::QslimOptions options;
-  options.outline = core::Outline::kStraightRunsFree;
-  std::size_t asked = 0;
-  options.outline_chord_ok = [&](std::uint32_t a, std::uint32_t b) {
-    ++asked;
-    CHECK(a < in.vertex_count());
-    CHECK(b < in.vertex_count());
-    return false;
-  };
-  const core::TriMesh out = core::qslim(in, in.vertex_count() / 5, nullptr, options);
-  CHECK(asked > 0);
-  // No chord allowed: the outline keeps every vertex, as locked.
-  CHECK(border(out) == border(in));
 }

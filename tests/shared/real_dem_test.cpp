@@ -7,6 +7,7 @@
 
 #include "core/footprint.hpp"
 #include "core/mesh_check.hpp"
+#include "core/qem.hpp"
 #include "core/qslim.hpp"
 #include "core/surface_sampling.hpp"
 #include "io/dem_reader.hpp"
@@ -146,9 +147,7 @@ TEST_CASE("Andorra SRTM voids: qem keeps the footprint, and the pinched outline 
   }
   in.faces = tin.faces;
   core::fix_orientation(in);
-  core::QslimOptions options;
-  options.outline = core::Outline::kStraightRunsFree;
-  const core::TriMesh out = core::qslim(in, in.vertex_count() / 10, nullptr, options);
+  const core::TriMesh out = core::qem_simplify(in, in.vertex_count() / 10).mesh;
   CHECK(out.vertex_count() == in.vertex_count() / 10);
   const core::MeshCheck mc = core::check_mesh(core::xy_of(out.xyz), out.faces);
   CHECK(mc.clockwise_or_flat == 0);
