@@ -11,17 +11,20 @@
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <chrono>
-#include <csignal>
-#include <thread>
 #include <cmath>
+#include <csignal>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <random>
+#include <set>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 #include "core/footprint.hpp"
 #include "core/mesh_check.hpp"
+#include "core/surface_sampling.hpp"
 
 namespace dpts::test {
 
@@ -34,6 +37,54 @@ core::HeightGrid make_grid(int width, int height, const std::function<double(int
     for (int c = 0; c < width; ++c) g.z[g.index(c, r)] = f(c, r);
   }
   return g;
+}
+
+namespace {
+const double kVoid = std::numeric_limits<double>::quiet_NaN();
+}  // namespace
+
+core::HeightGrid hills_with_voids(int w, int h) {
+  return make_grid(w, h, [w, h](int c, int r) {
+    if (std::hypot(c - w / 2.0, r - h / 2.0) < 7.0) return kVoid;
+    if (r == h / 4 && c >= 6 && c < w - 20) return kVoid;
+    if (c >= w - 6 && r >= h / 2 + 10 && r <= h / 2 + 14) return kVoid;
+    if (c + r < 3) return kVoid;
+    return 100.0 + 20.0 * std::sin(c * 0.3) * std::cos(r * 0.25) + 0.5 * c + 0.01 * r * r;
+  });
+}
+
+core::TriMesh hills_mesh(int w, int h) {
+  const auto g = make_grid(w, h, [w, h](int c, int r) {
+    if (std::hypot(c - 12.0, r - 14.0) < 4.0) return kVoid;
+    if (c >= w - 6 && r >= h / 2 - 2 && r <= h / 2 + 2) return kVoid;
+    if (c + r < 3) return kVoid;
+    return 10.0 * std::sin(c * 0.3) * std::cos(r * 0.25) + 0.3 * c;
+  });
+  const core::GridTin tin = core::grid_tin(g);
+  core::TriMesh m;
+  for (std::uint32_t cell : tin.cells) {
+    const double c = cell % static_cast<std::uint32_t>(w), r = cell / static_cast<std::uint32_t>(w);
+    m.xyz.insert(m.xyz.end(), {c, -r, g.z[cell]});
+  }
+  m.faces = tin.faces;
+  core::fix_orientation(m);
+  return m;
+}
+
+std::set<std::pair<double, double>> border_points(const core::TriMesh& m) {
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> uses;
+  for (const auto& f : m.faces) {
+    for (int i = 0; i < 3; ++i) {
+      const auto a = f[i], b = f[(i + 1) % 3];
+      ++uses[{std::min(a, b), std::max(a, b)}];
+    }
+  }
+  std::set<std::pair<double, double>> out;
+  for (const auto& [e, n] : uses) {
+    if (n != 1) continue;
+    for (auto v : {e.first, e.second}) out.insert({m.xyz[3 * v], m.xyz[3 * v + 1]});
+  }
+  return out;
 }
 
 TempDir::TempDir() {

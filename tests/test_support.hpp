@@ -3,16 +3,29 @@
 
 #include <filesystem>
 #include <functional>
+#include <set>
 #include <string>
 #include <vector>
 
 #include "core/elimination.hpp"
 #include "core/grid.hpp"
+#include "core/steiner_graph.hpp"
 
 namespace dpts::test {
 
 // A width x height grid with z = f(col, row); f returning NaN makes a no-data cell.
 core::HeightGrid make_grid(int width, int height, const std::function<double(int, int)>& f);
+
+// Hills with voids placed across the piece engines' first split lines: a round void in the
+// middle, a long straight one-row river, a notch in the east edge and a cut corner.
+core::HeightGrid hills_with_voids(int width = 96, int height = 80);
+
+// The grid TIN of hills with a void, a notch and a cut corner, vertices at (col, -row) so
+// faces are counter-clockwise (the collapse tests' input).
+core::TriMesh hills_mesh(int width = 40, int height = 32);
+
+// Positions (x, y) of the vertices on a mesh's border.
+std::set<std::pair<double, double>> border_points(const core::TriMesh& mesh);
 
 // A fresh, empty temporary folder, removed with its contents when the object dies.
 class TempDir {

@@ -4,8 +4,6 @@
 
 #include <catch2/catch.hpp>
 #include <cmath>
-#include <limits>
-#include <map>
 #include <set>
 
 #include "core/footprint.hpp"
@@ -15,53 +13,10 @@
 
 using namespace dpts;
 
-namespace {
-
-const double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-// Hills with a void, a notch and a cut corner; vertices at (col, -row) so faces are
-// counter-clockwise after fix_orientation.
-core::TriMesh hills_mesh(int w = 40, int h = 32) {
-  const auto g = test::make_grid(w, h, [w, h](int c, int r) {
-    if (std::hypot(c - 12.0, r - 14.0) < 4.0) return kNaN;
-    if (c >= w - 6 && r >= h / 2 - 2 && r <= h / 2 + 2) return kNaN;
-    if (c + r < 3) return kNaN;
-    return 10.0 * std::sin(c * 0.3) * std::cos(r * 0.25) + 0.3 * c;
-  });
-  const core::GridTin tin = core::grid_tin(g);
-  core::TriMesh m;
-  for (std::uint32_t cell : tin.cells) {
-    const double c = cell % static_cast<std::uint32_t>(w), r = cell / static_cast<std::uint32_t>(w);
-    m.xyz.insert(m.xyz.end(), {c, -r, g.z[cell]});
-  }
-  m.faces = tin.faces;
-  core::fix_orientation(m);
-  return m;
-}
-
-// Positions (x, y) of the vertices on the mesh's border.
-std::set<std::pair<double, double>> border(const core::TriMesh& m) {
-  std::map<std::pair<std::uint32_t, std::uint32_t>, int> uses;
-  for (const auto& f : m.faces) {
-    for (int i = 0; i < 3; ++i) {
-      const auto a = f[i], b = f[(i + 1) % 3];
-      ++uses[{std::min(a, b), std::max(a, b)}];
-    }
-  }
-  std::set<std::pair<double, double>> out;
-  for (const auto& [e, n] : uses) {
-    if (n != 1) continue;
-    for (auto v : {e.first, e.second}) out.insert({m.xyz[3 * v], m.xyz[3 * v + 1]});
-  }
-  return out;
-}
-
-}  // namespace
-
 TEST_CASE("qem keeps the count and the footprint on fewer outline vertices, no folds",
           "[core][qem]") {
-  const core::TriMesh in = hills_mesh();
-  const auto in_border = border(in);
+  const core::TriMesh in = test::hills_mesh();
+  const auto in_border = test::border_points(in);
   const double in_area = core::mesh_area(core::xy_of(in.xyz), in.faces);
   for (std::size_t keep : {in.vertex_count() / 2, in.vertex_count() / 10}) {
     INFO("keep " << keep);
@@ -76,7 +31,7 @@ TEST_CASE("qem keeps the count and the footprint on fewer outline vertices, no f
     CHECK(mc.clockwise_or_flat == 0);
     CHECK(mc.bad_edges == 0);
     CHECK(mc.area == Approx(in_area).epsilon(1e-12));
-    const auto out_border = border(out);
+    const auto out_border = test::border_points(out);
     for (const auto& p : out_border) CHECK(in_border.count(p) == 1);
     CHECK(out_border.size() <
           (keep < in.vertex_count() / 5 ? in_border.size() / 2 : in_border.size()));
@@ -94,7 +49,7 @@ TEST_CASE("qem keeps the count and the footprint on fewer outline vertices, no f
 }
 
 TEST_CASE("qem asks the chord test and keeps the outline when it refuses", "[core][qem]") {
-  const core::TriMesh in = hills_mesh();
+  const core::TriMesh in = test::hills_mesh();
   core::QemOptions options;
   std::size_t asked = 0;
   options.outline_chord_ok = [&](std::uint32_t a, std::uint32_t b) {
@@ -105,11 +60,11 @@ TEST_CASE("qem asks the chord test and keeps the outline when it refuses", "[cor
   };
   const core::QemResult r = core::qem_simplify(in, in.vertex_count() / 5, options);
   CHECK(asked > 0);
-  CHECK(border(r.mesh) == border(in));
+  CHECK(test::border_points(r.mesh) == test::border_points(in));
 }
 
 TEST_CASE("qem never moves or removes a locked vertex", "[core][qem]") {
-  const core::TriMesh in = hills_mesh();
+  const core::TriMesh in = test::hills_mesh();
   core::QemOptions options;
   options.locked.assign(in.vertex_count(), 0);
   std::set<std::uint32_t> locked;
@@ -131,7 +86,7 @@ TEST_CASE("qem never moves or removes a locked vertex", "[core][qem]") {
 }
 
 TEST_CASE("qem refuses a triangle the bound refuses, and goes on with the others", "[core][qem]") {
-  const core::TriMesh in = hills_mesh();
+  const core::TriMesh in = test::hills_mesh();
   core::QemOptions options;
   std::size_t asked = 0;
   // Refuse every triangle wider than 6 units: the mesh cannot go below some count.

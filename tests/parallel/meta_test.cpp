@@ -19,18 +19,6 @@ namespace {
 
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// Hills with voids placed across the first split lines: a round void in the middle, a long
-// straight one-row river, a notch in the east edge and a cut corner.
-core::HeightGrid hills(int w = 96, int h = 80) {
-  return test::make_grid(w, h, [w, h](int c, int r) {
-    if (std::hypot(c - w / 2.0, r - h / 2.0) < 7.0) return kNaN;
-    if (r == h / 4 && c >= 6 && c < w - 20) return kNaN;
-    if (c >= w - 6 && r >= h / 2 + 10 && r <= h / 2 + 14) return kNaN;
-    if (c + r < 3) return kNaN;
-    return 100.0 + 20.0 * std::sin(c * 0.3) * std::cos(r * 0.25) + 0.5 * c + 0.01 * r * r;
-  });
-}
-
 struct Fixture {
   test::TempDir dir;
   std::string path = (dir / "hills.tif").string();
@@ -38,7 +26,7 @@ struct Fixture {
   io::DemInfo info;
   Fixture() {
     GDALAllRegister();
-    test::write_geotiff(path, hills(), {500000, 30, 0, 4100000, 0, -30}, "");
+    test::write_geotiff(path, test::hills_with_voids(), {500000, 30, 0, 4100000, 0, -30}, "");
     grid = io::read_dem(path, {}, nullptr).grid;
     info = io::open_dem(path, {});
   }

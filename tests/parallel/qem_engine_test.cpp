@@ -8,7 +8,6 @@
 
 #include <catch2/catch.hpp>
 #include <cmath>
-#include <limits>
 #include <set>
 
 #include "core/mesh_check.hpp"
@@ -19,19 +18,6 @@ using namespace dpts;
 
 namespace {
 
-const double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-// Hills with voids across the first split lines (as meta_test's).
-core::HeightGrid hills(int w = 96, int h = 80) {
-  return test::make_grid(w, h, [w, h](int c, int r) {
-    if (std::hypot(c - w / 2.0, r - h / 2.0) < 7.0) return kNaN;
-    if (r == h / 4 && c >= 6 && c < w - 20) return kNaN;
-    if (c >= w - 6 && r >= h / 2 + 10 && r <= h / 2 + 14) return kNaN;
-    if (c + r < 3) return kNaN;
-    return 100.0 + 20.0 * std::sin(c * 0.3) * std::cos(r * 0.25) + 0.5 * c + 0.01 * r * r;
-  });
-}
-
 struct Fixture {
   test::TempDir dir;
   std::string path = (dir / "hills.tif").string();
@@ -41,9 +27,10 @@ struct Fixture {
     GDALAllRegister();
     if (geographic) {
       // 1 degree by 0.8 at 48 N: the grid lines bend in UTM.
-      test::write_geotiff(path, hills(), {-124.0, 1.0 / 96, 0, 48.8, 0, -0.8 / 80}, "EPSG:4326");
+      test::write_geotiff(path, test::hills_with_voids(), {-124.0, 1.0 / 96, 0, 48.8, 0, -0.8 / 80},
+                          "EPSG:4326");
     } else {
-      test::write_geotiff(path, hills(), {500000, 30, 0, 4100000, 0, -30}, "");
+      test::write_geotiff(path, test::hills_with_voids(), {500000, 30, 0, 4100000, 0, -30}, "");
     }
     info = io::open_dem(path, {});
     const core::TriMesh full = io::read_dem(path, {}, nullptr).grid_mesh();
