@@ -29,18 +29,13 @@
 namespace dpts::par {
 namespace {
 
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 std::uint64_t piece_seed(std::uint64_t seed, std::size_t piece) {
   std::uint64_t h = (seed + 0x9E3779B97F4A7C15ull) * 0xBF58476D1CE4E5B9ull;
   h ^= (piece + 1) * 0x94D049BB133111EBull;
   return h ^ (h >> 31);
 }
 
-}  // namespace
-
+// One streaming pass over the raster in strips of whole rows: surface vertices per block.
 core::BlockCounts count_blocks(const io::DemInfo& dem, std::size_t strip_bytes,
                                const core::Progress& progress, std::size_t* valid_cells,
                                std::size_t* absurd_cells) {
@@ -81,8 +76,6 @@ core::BlockCounts count_blocks(const io::DemInfo& dem, std::size_t strip_bytes,
   *absurd_cells = reader.absurd_cells();
   return bc;
 }
-
-namespace {
 
 // What a piece hands to the merge: the own vertices it kept after going `tail` removals
 // beyond its budget, those last removals in order (so the merge can take back any number of
@@ -319,6 +312,50 @@ double piece_value(const core::HeightGrid& window, int col0, int row0, const cor
   return pairs ? sum / pairs : 1.0;
 }
 
+std::vector<core::Piece> divide_dem(const io::DemInfo& dem, const KeepTarget& keep, int levels,
+                                    std::size_t tile_bytes, int halo,
+                                    const core::Progress& progress, MetaStats& st) {
+  auto t0 = std::chrono::steady_clock::now();
+  const core::BlockCounts bc = count_blocks(dem, std::max<std::size_t>(tile_bytes / 4, 1 << 20),
+                                            progress, &st.valid_cells, &st.absurd_cells);
+  st.block = bc.block;
+  st.count_s = seconds_since(t0);
+  if (st.valid_cells == 0) {
+    throw InputError(io::all_nodata_message(dem));
+  }
+  core::DivisionOptions div;
+  div.levels = levels;
+  div.budget_bytes = tile_bytes;
+  div.halo = halo;
+  const core::GridFrame& f = dem.frame;
+  div.col_metres = f.metres_per_unit * std::hypot(f.m[0][0], f.m[1][0]);
+  div.row_metres = f.metres_per_unit * std::hypot(f.m[0][1], f.m[1][1]);
+  std::vector<core::Piece> pieces = core::kd_divide(bc, div);
+  std::size_t total = 0;
+  for (const auto& p : pieces) total += p.vertices;
+  if (total < 3) {
+    throw InputError(dem.path + ": " + kNothingToTriangulate);
+  }
+  st.input_vertices = total;
+  st.target_vertices = target_count(keep, total);
+  st.pieces.assign(pieces.size(), {});
+  for (std::size_t i = 0; i < pieces.size(); ++i) st.pieces[i].piece = pieces[i];
+  return pieces;
+}
+
+std::size_t pieces_in_flight(std::size_t pieces) {
+  return std::min<std::size_t>(pieces,
+                               static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()));
+}
+
+void check_memory(const io::DemInfo& dem, std::size_t target, std::size_t need, std::size_t limit) {
+  if (limit == 0 || need <= limit) return;
+  throw InputError(dem.path + ": keeping " + std::to_string(target) + " vertices needs about " +
+                   format_bytes(static_cast<double>(need)) + ", more than the " +
+                   format_bytes(static_cast<double>(limit)) +
+                   " available; keep fewer (--keep, --vertices) or use a smaller --tile-mb");
+}
+
 MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
                          const core::Progress& progress, MetaStats* stats) {
   MetaStats local;
@@ -326,47 +363,14 @@ MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
   const auto bytes = options.tile_bytes;
 
   // 1. Count surface vertices per block, streaming; divide.
+  const std::vector<core::Piece> pieces =
+      divide_dem(dem, options.keep, options.levels, bytes, options.halo, progress, st);
+  check_memory(dem, st.target_vertices,
+               meta_memory_estimate(st.target_vertices, bytes, pieces_in_flight(pieces.size())),
+               options.memory_limit_bytes);
   auto t0 = std::chrono::steady_clock::now();
-  const core::BlockCounts bc =
-      count_blocks(dem, std::max<std::size_t>(bytes / 4, 1 << 20), progress, &st.valid_cells,
-                   &st.absurd_cells);
-  st.block = bc.block;
-  st.count_s = seconds_since(t0);
-  if (st.valid_cells == 0) {
-    throw InputError(io::all_nodata_message(dem));
-  }
-  core::DivisionOptions div;
-  div.levels = options.levels;
-  div.budget_bytes = bytes;
-  div.halo = options.halo;
-  const core::GridFrame& f = dem.frame;
-  div.col_metres = f.metres_per_unit * std::hypot(f.m[0][0], f.m[1][0]);
-  div.row_metres = f.metres_per_unit * std::hypot(f.m[0][1], f.m[1][1]);
-  const std::vector<core::Piece> pieces = core::kd_divide(bc, div);
-  std::size_t total = 0;
-  for (const auto& p : pieces) total += p.vertices;
-  if (total < 3) {
-    throw InputError(dem.path + ": " + kNothingToTriangulate);
-  }
-  st.input_vertices = total;
-  st.target_vertices = target_count(options.keep, total);
-  if (options.memory_limit_bytes > 0) {
-    const std::size_t in_flight = std::min<std::size_t>(
-        pieces.size(), static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()));
-    const std::size_t need = meta_memory_estimate(st.target_vertices, bytes, in_flight);
-    if (need > options.memory_limit_bytes) {
-      throw InputError(dem.path + ": keeping " + std::to_string(st.target_vertices) +
-                       " vertices needs about " + format_bytes(static_cast<double>(need)) +
-                       ", more than the " +
-                       format_bytes(static_cast<double>(options.memory_limit_bytes)) +
-                       " available; keep fewer (--keep, --vertices) or use a smaller --tile-mb");
-    }
-  }
-  st.pieces.assign(pieces.size(), {});
-  for (std::size_t i = 0; i < pieces.size(); ++i) st.pieces[i].piece = pieces[i];
 
   // 2. Piece values, concurrently: each task reads its piece through its own handle.
-  t0 = std::chrono::steady_clock::now();
   {
     SharedProgress shared(progress, pieces.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pieces.size(), 1),
@@ -399,7 +403,8 @@ MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
       counts.push_back(p.piece.vertices);
       values.push_back(p.value);
     }
-    const double p2l = 100.0 * static_cast<double>(st.target_vertices) / total;
+    const double p2l =
+        100.0 * static_cast<double>(st.target_vertices) / static_cast<double>(st.input_vertices);
     const auto budgets = core::piece_budgets(counts, values, p2l);
     for (std::size_t i = 0; i < budgets.size(); ++i) st.pieces[i].budget = budgets[i];
   }

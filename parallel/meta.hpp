@@ -73,11 +73,20 @@ struct MetaResult {
 MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
                          const core::Progress& progress, MetaStats* stats = nullptr);
 
-// One streaming pass over the raster in strips of whole rows (about strip_bytes each): surface
-// vertices per block, for the k-d division. Counts valid cells and absurd heights too.
-core::BlockCounts count_blocks(const io::DemInfo& dem, std::size_t strip_bytes,
-                               const core::Progress& progress, std::size_t* valid_cells,
-                               std::size_t* absurd_cells);
+// The piece engines' first stage: one streaming count of surface vertices per block (in
+// strips of about tile_bytes / 4), then the k-d division into pieces that fit tile_bytes with
+// `halo` cells of context. Fills st's counts, block, count_s, target (from keep) and pieces.
+// Throws InputError when the DEM has no valid cell or fewer than 3 surface vertices.
+std::vector<core::Piece> divide_dem(const io::DemInfo& dem, const KeepTarget& keep, int levels,
+                                    std::size_t tile_bytes, int halo,
+                                    const core::Progress& progress, MetaStats& st);
+
+// Pieces simplified at once: as many as there are threads, at most all of them.
+std::size_t pieces_in_flight(std::size_t pieces);
+
+// Refuses (InputError naming the DEM, the target and both sizes) a run whose estimated need
+// exceeds limit; limit 0: no check.
+void check_memory(const io::DemInfo& dem, std::size_t target, std::size_t need, std::size_t limit);
 
 // Peak resident memory of this process so far in kB (Linux VmHWM), 0 where unknown.
 std::size_t peak_rss_kb();

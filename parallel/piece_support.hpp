@@ -1,5 +1,5 @@
-// What the piece engines (meta.cpp, qem_engine.cpp) share: progress from concurrent pieces,
-// and handing a finished piece's memory back.
+// What the piece engines (meta.cpp, qem_engine.cpp) share: stage clocks, progress from
+// concurrent pieces, and handing a finished piece's memory back.
 #pragma once
 
 #ifdef __GLIBC__
@@ -7,6 +7,7 @@
 #endif
 
 #include <atomic>
+#include <chrono>
 #include <mutex>
 #include <string_view>
 #include <vector>
@@ -15,6 +16,10 @@
 #include "core/errors.hpp"
 
 namespace dpts::par {
+
+inline double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
 
 // Hands memory freed by a finished piece back to the system. glibc keeps freed heap memory
 // (a piece's triangulation is freed in thousands of blocks) for reuse; as kept-vertex outputs

@@ -2,7 +2,6 @@
 #include "parallel/qem_engine.hpp"
 
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
@@ -20,10 +19,6 @@
 
 namespace dpts::par {
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // Where the mesh's vertices lie while it is simplified. A DEM in its own CRS: the frame, exact
 // and linear (grid lines stay exactly straight). A reprojected DEM: its cells' true positions
@@ -206,45 +201,19 @@ core::TriMesh simplify_qem(const io::DemInfo& dem, const QemEngineOptions& optio
   const auto bytes = options.tile_bytes;
 
   // 1. Count surface vertices per block, streaming; divide.
-  auto t0 = std::chrono::steady_clock::now();
-  const core::BlockCounts bc = count_blocks(dem, std::max<std::size_t>(bytes / 4, 1 << 20),
-                                            progress, &st.valid_cells, &st.absurd_cells);
-  st.block = bc.block;
-  st.count_s = seconds_since(t0);
-  if (st.valid_cells == 0) throw InputError(io::all_nodata_message(dem));
-  core::DivisionOptions div;
-  div.levels = options.levels;
-  div.budget_bytes = bytes;
-  div.halo = 1;
-  const core::GridFrame& f = dem.frame;
-  div.col_metres = f.metres_per_unit * std::hypot(f.m[0][0], f.m[1][0]);
-  div.row_metres = f.metres_per_unit * std::hypot(f.m[0][1], f.m[1][1]);
-  const std::vector<core::Piece> pieces = core::kd_divide(bc, div);
-  std::size_t total = 0;
-  for (const auto& p : pieces) total += p.vertices;
-  if (total < 3) throw InputError(dem.path + ": " + kNothingToTriangulate);
-  st.input_vertices = total;
-  st.target_vertices = target_count(options.keep, total);
-  const double fraction = static_cast<double>(st.target_vertices) / static_cast<double>(total);
-  if (options.memory_limit_bytes > 0) {
-    const std::size_t in_flight = std::min<std::size_t>(
-        pieces.size(), static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()));
-    const double kept = std::min(1.0, options.slack * fraction) * static_cast<double>(total);
-    const std::size_t need =
-        static_cast<std::size_t>(kept * kQemBytesPerKeptVertex) + bytes * in_flight;
-    if (need > options.memory_limit_bytes) {
-      throw InputError(dem.path + ": keeping " + std::to_string(st.target_vertices) +
-                       " vertices needs about " + format_bytes(static_cast<double>(need)) +
-                       ", more than the " +
-                       format_bytes(static_cast<double>(options.memory_limit_bytes)) +
-                       " available; keep fewer (--keep, --vertices) or use a smaller --tile-mb");
-    }
-  }
-  st.pieces.assign(pieces.size(), {});
-  for (std::size_t i = 0; i < pieces.size(); ++i) st.pieces[i].piece = pieces[i];
+  const std::vector<core::Piece> pieces =
+      divide_dem(dem, options.keep, options.levels, bytes, 1, progress, st);
+  const double fraction =
+      static_cast<double>(st.target_vertices) / static_cast<double>(st.input_vertices);
+  const double kept =
+      std::min(1.0, options.slack * fraction) * static_cast<double>(st.input_vertices);
+  check_memory(dem, st.target_vertices,
+               static_cast<std::size_t>(kept * kQemBytesPerKeptVertex) +
+                   bytes * pieces_in_flight(pieces.size()),
+               options.memory_limit_bytes);
 
   // 2. Simplify the pieces concurrently, seams locked.
-  t0 = std::chrono::steady_clock::now();
+  auto t0 = std::chrono::steady_clock::now();
   const Positions positions(dem);
   std::vector<PieceMesh> outputs(pieces.size());
   {
