@@ -146,29 +146,12 @@ void write_output(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem, 
   write_mesh(o, dem, std::move(mesh), out);
 }
 
-// Writes a mesh made in the DEM's frame (u, w, heights in frame units) in the output CRS.
-void write_frame_mesh(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem,
-                      const dpts::core::TriMesh& result, dpts::io::AtomicOutputFile& out) {
-  using namespace dpts;
-  const double unit = dem.frame.metres_per_unit;
-  // Back to grid positions (the frame is linear), then to the output CRS.
-  double inv[2][2];
-  dem.frame.inverse(inv);
-  std::vector<double> grid_xy(2 * result.vertex_count());
-  for (std::size_t v = 0; v < result.vertex_count(); ++v) {
-    const double u = result.xyz[3 * v], w = result.xyz[3 * v + 1];
-    grid_xy[2 * v] = inv[0][0] * u + inv[0][1] * w;
-    grid_xy[2 * v + 1] = inv[1][0] * u + inv[1][1] * w;
-  }
-  const std::vector<double> xy = dem.output_xy_of_grid(grid_xy);
-  io::Mesh mesh;
-  mesh.xyz.resize(3 * result.vertex_count());
-  for (std::size_t v = 0; v < result.vertex_count(); ++v) {
-    mesh.xyz[3 * v] = xy[2 * v];
-    mesh.xyz[3 * v + 1] = xy[2 * v + 1];
-    mesh.xyz[3 * v + 2] = result.xyz[3 * v + 2] * unit;
-  }
-  mesh.faces = result.faces;
+// Writes a triangle mesh already in the output CRS (heights in metres).
+void write_tri_mesh(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem,
+                    dpts::core::TriMesh result, dpts::io::AtomicOutputFile& out) {
+  dpts::io::Mesh mesh;
+  mesh.xyz = std::move(result.xyz);
+  mesh.faces = std::move(result.faces);
   write_mesh(o, dem, std::move(mesh), out);
 }
 
@@ -277,7 +260,8 @@ int run_qslim(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printe
                  o.algo_text.c_str(), stats.rejected_folds);
   }
   const std::size_t faces = result.faces.size();
-  write_frame_mesh(o, dem, result, out);
+  dem.frame_mesh_to_output(result);
+  write_tri_mesh(o, dem, std::move(result), out);
   record_output(o, dem, dem.valid_cells, input, stats.kept_vertices, faces);
   summary(o, input, stats.kept_vertices, faces, start);
   return 0;
@@ -317,6 +301,26 @@ void print_pieces(const dpts::par::MetaStats& stats, bool values) {
                stats.count_s, stats.values_s, stats.simplify_s, stats.merge_s);
 }
 
+// After a piece engine ran: the absurd-heights note, --verbose's piece table (values: the
+// pieces have vp-meta/pld-meta values) and the kept-count warning.
+void after_pieces(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem,
+                  const dpts::par::MetaStats& stats, bool values) {
+  const std::string absurd = dpts::io::absurd_heights_note(dem, stats.absurd_cells);
+  if (!absurd.empty()) std::cerr << "dpts-par: " << absurd << "\n";
+  if (o.verbose) print_pieces(stats, values);
+  warn_kept(stats.kept_vertices, stats.target_vertices);
+}
+
+// A piece engine's output written: the report's output and pieces, the summary line.
+int close_pieces(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem,
+                 const dpts::par::MetaStats& stats, std::size_t faces,
+                 std::chrono::steady_clock::time_point start) {
+  record_output(o, dem, stats.valid_cells, stats.input_vertices, stats.kept_vertices, faces);
+  if (!g_report.path.empty()) g_report.pieces_json = dpts::cli::pieces_json(stats);
+  summary(o, stats.input_vertices, stats.kept_vertices, faces, start);
+  return 0;
+}
+
 bool g_user_cache = false;  // GDAL_CACHEMAX came from the environment
 
 // The piece engines' tile budget in bytes. GDAL's block cache is shared by all pieces'
@@ -347,19 +351,10 @@ int run_qem(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer,
   par::MetaStats stats;
   core::TriMesh result = par::simplify_qem(dem, qo, progress, &stats);
   printer.finish();
-  const std::string absurd = io::absurd_heights_note(dem, stats.absurd_cells);
-  if (!absurd.empty()) std::cerr << "dpts-par: " << absurd << "\n";
-  if (o.verbose) print_pieces(stats, false);
-  warn_kept(stats.kept_vertices, stats.target_vertices);
+  after_pieces(o, dem, stats, false);
   const std::size_t faces = result.faces.size();
-  io::Mesh mesh;
-  mesh.xyz = std::move(result.xyz);
-  mesh.faces = std::move(result.faces);
-  write_mesh(o, dem, std::move(mesh), out);
-  record_output(o, dem, stats.valid_cells, stats.input_vertices, stats.kept_vertices, faces);
-  if (!g_report.path.empty()) g_report.pieces_json = cli::pieces_json(stats);
-  summary(o, stats.input_vertices, stats.kept_vertices, faces, start);
-  return 0;
+  write_tri_mesh(o, dem, std::move(result), out);
+  return close_pieces(o, dem, stats, faces, start);
 }
 
 int run_meta(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer,
@@ -380,10 +375,7 @@ int run_meta(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer
   par::MetaStats stats;
   par::MetaResult result = par::simplify_meta(dem, mo, progress, &stats);
   printer.finish();
-  const std::string absurd = io::absurd_heights_note(dem, stats.absurd_cells);
-  if (!absurd.empty()) std::cerr << "dpts-par: " << absurd << "\n";
-  if (o.verbose) print_pieces(stats, true);
-  warn_kept(stats.kept_vertices, stats.target_vertices);
+  after_pieces(o, dem, stats, true);
   const std::size_t faces = result.tin.faces.size();
   const auto t_write = std::chrono::steady_clock::now();
   write_output(o, dem, std::move(result.tin), result.z, out);
@@ -391,10 +383,7 @@ int run_meta(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer
     std::fprintf(stderr, "dpts-par: stages: write %.2f s\n",
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t_write).count());
   }
-  record_output(o, dem, stats.valid_cells, stats.input_vertices, stats.kept_vertices, faces);
-  if (!g_report.path.empty()) g_report.pieces_json = cli::pieces_json(stats);
-  summary(o, stats.input_vertices, stats.kept_vertices, faces, start);
-  return 0;
+  return close_pieces(o, dem, stats, faces, start);
 }
 
 int run(const dpts::cli::ParOptions& o) {

@@ -106,6 +106,24 @@ std::vector<double> DemInfo::project_grid(const std::vector<double>& grid,
   return xy;
 }
 
+void DemInfo::frame_mesh_to_output(core::TriMesh& mesh) const {
+  const std::size_t n = mesh.vertex_count();
+  double inv[2][2];
+  frame.inverse(inv);
+  std::vector<double> grid(2 * n);
+  for (std::size_t v = 0; v < n; ++v) {
+    const double u = mesh.xyz[3 * v], w = mesh.xyz[3 * v + 1];
+    grid[2 * v] = inv[0][0] * u + inv[0][1] * w;
+    grid[2 * v + 1] = inv[1][0] * u + inv[1][1] * w;
+  }
+  const std::vector<double> xy = output_xy_of_grid(grid);
+  for (std::size_t v = 0; v < n; ++v) {
+    mesh.xyz[3 * v] = xy[2 * v];
+    mesh.xyz[3 * v + 1] = xy[2 * v + 1];
+    mesh.xyz[3 * v + 2] *= frame.metres_per_unit;
+  }
+}
+
 std::vector<double> DemInfo::grid_xy(const std::vector<double>& output_xy) const {
   const std::size_t n = output_xy.size() / 2;
   std::vector<double> x(n), y(n);

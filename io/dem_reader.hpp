@@ -70,6 +70,11 @@ struct DemInfo {
   // made for the call).
   std::vector<double> output_xy_of_grid_concurrent(const std::vector<double>& grid_xy) const;
 
+  // A mesh built in the frame (u, w, heights in frame units: core::GridFrame) moved to the
+  // output CRS in place: x, y through the grid positions (the frame is linear), heights in
+  // metres. Throws IoError if the CRS transformation fails.
+  void frame_mesh_to_output(core::TriMesh& mesh) const;
+
   // Grid positions (col, row; cell centres at integers) of points given in the output CRS:
   // the inverse of output_xy. Throws IoError if the CRS transformation fails.
   std::vector<double> grid_xy(const std::vector<double>& output_xy) const;

@@ -56,29 +56,14 @@ struct Positions {
   }
   // The mesh in the output CRS (heights in metres).
   void to_output(core::TriMesh& mesh) const {
-    const double unit = dem->frame.metres_per_unit;
-    const std::size_t n = mesh.vertex_count();
-    if (projected) {
-      for (std::size_t v = 0; v < n; ++v) {
-        mesh.xyz[3 * v] = ox + mesh.xyz[3 * v] / scale;
-        mesh.xyz[3 * v + 1] = oy + mesh.xyz[3 * v + 1] / scale;
-        mesh.xyz[3 * v + 2] *= unit;
-      }
+    if (!projected) {
+      dem->frame_mesh_to_output(mesh);
       return;
     }
-    double inv[2][2];
-    dem->frame.inverse(inv);
-    std::vector<double> grid_xy(2 * n);
-    for (std::size_t v = 0; v < n; ++v) {
-      const double u = mesh.xyz[3 * v], w = mesh.xyz[3 * v + 1];
-      grid_xy[2 * v] = inv[0][0] * u + inv[0][1] * w;
-      grid_xy[2 * v + 1] = inv[1][0] * u + inv[1][1] * w;
-    }
-    const std::vector<double> xy = dem->output_xy_of_grid(grid_xy);
-    for (std::size_t v = 0; v < n; ++v) {
-      mesh.xyz[3 * v] = xy[2 * v];
-      mesh.xyz[3 * v + 1] = xy[2 * v + 1];
-      mesh.xyz[3 * v + 2] *= unit;
+    for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+      mesh.xyz[3 * v] = ox + mesh.xyz[3 * v] / scale;
+      mesh.xyz[3 * v + 1] = oy + mesh.xyz[3 * v + 1] / scale;
+      mesh.xyz[3 * v + 2] *= dem->frame.metres_per_unit;
     }
   }
   // With projected positions: the outline test of collinearity on the grid (cells given as
