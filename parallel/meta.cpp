@@ -99,14 +99,8 @@ PieceOutput simplify_piece(const io::DemInfo& dem, const core::Piece& p, std::si
   const int wc1 = std::min(dem.width, p.col0 + p.width + halo);
   const int wr1 = std::min(dem.height, p.row0 + p.height + halo);
   const int ww = wc1 - wc0, wh = wr1 - wr0;
-  auto t0 = std::chrono::steady_clock::now();
-  core::HeightGrid grid;
-  {
-    io::WindowReader reader(dem);
-    grid = reader.read(wc0, wr0, ww, wh);
-  }
-  report.read_s = seconds_since(t0);
-  t0 = std::chrono::steady_clock::now();
+  core::HeightGrid grid = read_window(dem, wc0, wr0, ww, wh, report.read_s);
+  const auto t0 = std::chrono::steady_clock::now();
   // Own cells (window-local): the piece. The rest is context: triangulated, never removed.
   const int oc0 = p.col0 - wc0, or0 = p.row0 - wr0, oc1 = oc0 + p.width, or1 = or0 + p.height;
   auto own = [&](int c, int r) { return c >= oc0 && c < oc1 && r >= or0 && r < or1; };

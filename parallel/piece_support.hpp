@@ -14,11 +14,23 @@
 
 #include "core/elimination.hpp"
 #include "core/errors.hpp"
+#include "io/dem_reader.hpp"
 
 namespace dpts::par {
 
 inline double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Reads a piece's window through a GDAL handle of its own (pieces are read concurrently) and
+// sets read_s to the time it took.
+inline core::HeightGrid read_window(const io::DemInfo& dem, int col0, int row0, int width,
+                                    int height, double& read_s) {
+  const auto t0 = std::chrono::steady_clock::now();
+  io::WindowReader reader(dem);
+  core::HeightGrid grid = reader.read(col0, row0, width, height);
+  read_s = seconds_since(t0);
+  return grid;
 }
 
 // Hands memory freed by a finished piece back to the system. glibc keeps freed heap memory

@@ -105,14 +105,8 @@ PieceMesh simplify_piece(const io::DemInfo& dem, const Positions& positions, con
   const int wc1 = std::min(dem.width, p.col0 + p.width + 1);
   const int wr1 = std::min(dem.height, p.row0 + p.height + 1);
   const int ww = wc1 - wc0, wh = wr1 - wr0;
-  auto t0 = std::chrono::steady_clock::now();
-  core::HeightGrid grid;
-  {
-    io::WindowReader reader(dem);
-    grid = reader.read(wc0, wr0, ww, wh);
-  }
-  report.read_s = seconds_since(t0);
-  t0 = std::chrono::steady_clock::now();
+  core::HeightGrid grid = read_window(dem, wc0, wr0, ww, wh, report.read_s);
+  const auto t0 = std::chrono::steady_clock::now();
   const core::GridTin tin = core::grid_tin(grid, core::delaunay_diagonal(dem.frame));
   PieceMesh out;
   if (tin.faces.empty()) return out;
