@@ -117,6 +117,10 @@ class Collapser {
       }
     }
     mesh.faces = {};
+    plane_ = std::move(o_.plane_xy);
+    if (!plane_.empty() && (plane_.size() != 2 * n || !o_.to_plane)) {
+      throw std::invalid_argument("qem: plane_xy needs 2 values per vertex and to_plane");
+    }
     link_opposites();
     out_.assign(n, kNone);
     for (std::uint32_t h = 0; h < fv_.size(); ++h) {
@@ -164,6 +168,10 @@ class Collapser {
         heap_.set(e, p.cost);  // its cost went up since it was queued (see collapse): later
         continue;
       }
+      if (!plane_.empty() && !to_plane(p)) {
+        ++r.refused;
+        continue;
+      }
       if (!valid(p)) {
         ++r.refused;
         continue;
@@ -177,7 +185,14 @@ class Collapser {
     }
   }
 
-  void result(QemResult& r) const {
+  // The output (compacted), once run is done: the queue and the connectivity go first, so
+  // that the output never sits beside them (the peak of the piece engine's merge).
+  void result(QemResult& r) {
+    heap_ = IndexedMinHeap();
+    edges_ = {};
+    opp_ = {};
+    out_ = {};
+    area_ = {};
     const std::size_t n = xyz_.size() / 3;
     std::vector<std::uint32_t> id(n, kNone);
     std::size_t faces = 0;
@@ -192,6 +207,7 @@ class Collapser {
       r.source.push_back(v);
       r.mesh.xyz.insert(r.mesh.xyz.end(), {xyz_[3 * v], xyz_[3 * v + 1], xyz_[3 * v + 2]});
       r.quadrics.push_back(q_[v]);
+      if (!plane_.empty()) r.plane_xy.insert(r.plane_xy.end(), {plane_[2 * v], plane_[2 * v + 1]});
     }
     for (std::size_t f = 0; 3 * f < fv_.size(); ++f) {
       if (fv_[3 * f] == kNone) continue;
@@ -203,13 +219,25 @@ class Collapser {
   static constexpr std::uint8_t kGone = 1, kLocked = 2, kPinched = 4;
 
   // A collapse: half-edge h (a face's, from a to b) and the vertex that goes; the other one
-  // stays, moved to x.
+  // stays, moved to x: vertex `at`'s position, or (kNone) an optimum. xy: x in the second
+  // plane, if any.
   struct Plan {
     std::uint32_t h = kNone;
     bool source_goes = true;
     double x[3] = {0, 0, 0};
+    std::uint32_t at = kNone;
+    double xy[2] = {0, 0};
     double cost = 0;
   };
+
+  // p.xy from p.x: a vertex's plane position, or the caller's map of an optimum.
+  bool to_plane(Plan& p) const {
+    if (p.at != kNone) {
+      p.xy[0] = plane_[2 * p.at], p.xy[1] = plane_[2 * p.at + 1];
+      return true;
+    }
+    return o_.to_plane(p.x, p.xy);
+  }
 
   const double* pos(std::uint32_t v) const { return &xyz_[3 * v]; }
   std::uint32_t src(std::uint32_t h) const { return fv_[h]; }
@@ -375,6 +403,7 @@ class Collapser {
       if (fixed_a && fixed_b) return false;
       const std::uint32_t stay = fixed_a ? a : b;
       std::copy(pos(stay), pos(stay) + 3, p.x);
+      p.at = stay;
       p.source_goes = !fixed_a;
       p.cost = cost(h, q, p.x);
       return true;
@@ -390,6 +419,7 @@ class Collapser {
         p.cost = c;
         p.source_goes = source_goes;
         std::copy(pos(stay), pos(stay) + 3, p.x);
+        p.at = stay;
       }
     }
     return found;
@@ -436,6 +466,9 @@ class Collapser {
             const double* s = pos(fv_[prev_of(e)]);
             if (orient(s, p.x, r) != CGAL::LEFT_TURN ||
                 (o_.triangle_ok && !o_.triangle_ok(s, p.x, r))) {
+              ok = false;
+            } else if (!plane_.empty() && orient(&plane_[2 * fv_[prev_of(e)]], p.xy,
+                                                 &plane_[2 * dst(e)]) != CGAL::LEFT_TURN) {
               ok = false;
             }
           },
@@ -510,6 +543,7 @@ class Collapser {
     }
     q_[stay] += q_[gone];
     std::copy(p.x, p.x + 3, &xyz_[3 * stay]);
+    if (!plane_.empty()) std::copy(p.xy, p.xy + 2, &plane_[2 * stay]);
     around(
         stay, [&](std::uint32_t e) { area_[e / 3] = face_area(e / 3); }, [](std::uint32_t) {});
     // New costs for every edge whose star changed: the edges at stay and at its neighbours.
@@ -559,6 +593,7 @@ class Collapser {
 
   QemOptions& o_;
   std::vector<double> xyz_;
+  std::vector<double> plane_;  // per vertex x, y in the second plane (empty: none)
   std::vector<std::uint32_t> fv_, opp_, out_;
   std::vector<std::uint8_t> flags_;
   std::vector<double> area_;

@@ -49,12 +49,21 @@ struct QemOptions {
   // Whether a triangle (corners a, b, c, counter-clockwise seen from above) may be made; null:
   // always (--max-error's test).
   std::function<bool(const double* a, const double* b, const double* c)> triangle_ok;
+  // A second plane the positions map to, where new triangles must be counter-clockwise too:
+  // a reprojected DEM's grid (in frame units). Its mesh is in true output coordinates, where
+  // grid lines bend, and a sliver along a straight outline run can be counter-clockwise there
+  // but degenerate on the grid, over a void's cell (pyrenees_andorra_voids to 10 %).
+  // plane_xy: per vertex x, y in the plane (empty: no second plane). to_plane: maps a new
+  // position (a collapse's optimum) there; false if it cannot (the collapse is refused).
+  std::vector<double> plane_xy;
+  std::function<bool(const double* xyz, double* xy)> to_plane;
 };
 
 struct QemResult {
   TriMesh mesh;                       // compacted, faces counter-clockwise
   std::vector<std::uint32_t> source;  // per output vertex: its input vertex id
   std::vector<Quadric> quadrics;      // per output vertex: its accumulated quadric
+  std::vector<double> plane_xy;       // per output vertex: x, y in options.plane_xy's plane
   std::size_t input_vertices = 0, collapses = 0;
   std::size_t refused = 0;  // collapses refused at the top of the queue (fold, topology, bound)
 };

@@ -149,6 +149,26 @@ std::vector<double> DemInfo::grid_xy(const std::vector<double>& output_xy) const
   return grid;
 }
 
+std::function<bool(double, double, double&, double&)> DemInfo::grid_of_output_fn() const {
+  std::shared_ptr<OGRCoordinateTransformation> ct;
+  if (from_output) {
+    ct.reset(from_output->Clone(), TransformDeleter());
+    if (!ct) throw IoError(path + ": cannot copy the transformation from " + output_crs_name);
+  }
+  const double* gt = geotransform;
+  const std::array<double, 6> g{gt[0], gt[1], gt[2], gt[3], gt[4], gt[5]};
+  return [ct, g](double x, double y, double& col, double& row) {
+    int ok = 0;
+    if (ct && (!ct->Transform(1, &x, &y, nullptr, &ok) || !ok)) return false;
+    // Invert the geotransform, as grid_xy.
+    const double det = g[1] * g[5] - g[2] * g[4];
+    const double dx = x - g[0], dy = y - g[3];
+    col = (g[5] * dx - g[2] * dy) / det - 0.5;
+    row = (-g[4] * dx + g[1] * dy) / det - 0.5;
+    return true;
+  };
+}
+
 double DemInfo::outline_tolerance_m() const {
   return 0.01 * frame.metres_per_unit * std::min(1.0, std::fabs(frame.m[1][1]));
 }

@@ -79,6 +79,11 @@ struct DemInfo {
   // the inverse of output_xy. Throws IoError if the CRS transformation fails.
   std::vector<double> grid_xy(const std::vector<double>& output_xy) const;
 
+  // A point map from the output CRS to grid positions (col, row), as grid_xy, with a
+  // transformation of its own: concurrent tasks each make their own. False where the
+  // transformation fails.
+  std::function<bool(double x, double y, double& col, double& row)> grid_of_output_fn() const;
+
   // For a reprojected DEM (to_output set): a thread-safe test for core's outline rule, for an
   // Eliminator working on the window of `window_width` columns whose first cell is (col0,
   // row0) (window-local cell indices). It accepts the straight outline chord from cell a to

@@ -38,21 +38,37 @@ struct Positions {
   }
   // x, y of cells (col, row pairs) in frame units; safe from concurrent tasks.
   std::vector<double> of(const std::vector<double>& grid_xy) const {
-    std::vector<double> xy(grid_xy.size());
-    if (!projected) {
-      for (std::size_t i = 0; 2 * i < grid_xy.size(); ++i) {
-        const int c = static_cast<int>(grid_xy[2 * i]), r = static_cast<int>(grid_xy[2 * i + 1]);
-        xy[2 * i] = dem->frame.u(c, r);
-        xy[2 * i + 1] = dem->frame.w(c, r);
-      }
-      return xy;
-    }
-    xy = dem->output_xy_of_grid_concurrent(grid_xy);
+    if (!projected) return frame_of(grid_xy);
+    std::vector<double> xy = dem->output_xy_of_grid_concurrent(grid_xy);
     for (std::size_t i = 0; 2 * i < xy.size(); ++i) {
       xy[2 * i] = (xy[2 * i] - ox) * scale;
       xy[2 * i + 1] = (xy[2 * i + 1] - oy) * scale;
     }
     return xy;
+  }
+  // The frame's x, y of cells: the grid, linearly.
+  std::vector<double> frame_of(const std::vector<double>& grid_xy) const {
+    std::vector<double> xy(grid_xy.size());
+    for (std::size_t i = 0; 2 * i < grid_xy.size(); ++i) {
+      const int c = static_cast<int>(grid_xy[2 * i]), r = static_cast<int>(grid_xy[2 * i + 1]);
+      xy[2 * i] = dem->frame.u(c, r);
+      xy[2 * i + 1] = dem->frame.w(c, r);
+    }
+    return xy;
+  }
+  // With projected positions, folds are refused on the grid too (core's second plane, in
+  // frame units): the map of a new position there, with a transformation of its own (one per
+  // task).
+  std::function<bool(const double*, double*)> to_plane() const {
+    const auto grid_of = dem->grid_of_output_fn();
+    const core::GridFrame f = dem->frame;
+    return [grid_of, f, ox = ox, oy = oy, scale = scale](const double* xyz, double* xy) {
+      double c, r;
+      if (!grid_of(ox + xyz[0] / scale, oy + xyz[1] / scale, c, r)) return false;
+      xy[0] = f.m[0][0] * c + f.m[0][1] * r;
+      xy[1] = f.m[1][0] * c + f.m[1][1] * r;
+      return true;
+    };
   }
   // The mesh in the output CRS (heights in metres).
   void to_output(core::TriMesh& mesh) const {
@@ -89,8 +105,10 @@ struct PieceMesh {
   std::vector<core::Quadric> quadrics;
   std::vector<std::uint32_t> cell;  // per vertex: its raster cell (where it started)
   std::vector<char> seam;           // per vertex: shared with another piece's window
+  std::vector<double> plane_xy;     // per vertex: x, y on the grid (reprojected DEMs only)
   std::size_t bytes() const {
-    return mesh.xyz.capacity() * sizeof(double) + mesh.faces.capacity() * sizeof(mesh.faces[0]) +
+    return (mesh.xyz.capacity() + plane_xy.capacity()) * sizeof(double) +
+           mesh.faces.capacity() * sizeof(mesh.faces[0]) +
            quadrics.capacity() * sizeof(core::Quadric) + cell.capacity() * sizeof(std::uint32_t) +
            seam.capacity();
   }
@@ -118,9 +136,13 @@ PieceMesh simplify_piece(const io::DemInfo& dem, const Positions& positions, con
     grid_xy[2 * v + 1] = wr0 + static_cast<int>(tin.cells[v] / static_cast<std::uint32_t>(ww));
   }
   const std::vector<double> xy = positions.of(grid_xy);
+  core::QemOptions qo;
+  if (positions.projected) {
+    qo.plane_xy = positions.frame_of(grid_xy);
+    qo.to_plane = positions.to_plane();
+  }
   grid_xy = {};
   mesh.xyz.resize(3 * tin.cells.size());
-  core::QemOptions qo;
   qo.locked.assign(tin.cells.size(), 0);
   std::size_t locked = 0;
   for (std::size_t v = 0; v < tin.cells.size(); ++v) {
@@ -153,6 +175,7 @@ PieceMesh simplify_piece(const io::DemInfo& dem, const Positions& positions, con
   core::QemResult r = core::qem_simplify(std::move(mesh), keep, std::move(qo), progress);
   out.mesh = std::move(r.mesh);
   out.quadrics = std::move(r.quadrics);
+  out.plane_xy = std::move(r.plane_xy);
   out.cell.resize(r.source.size());
   out.seam.resize(r.source.size());
   for (std::size_t v = 0; v < r.source.size(); ++v) {
@@ -165,6 +188,7 @@ PieceMesh simplify_piece(const io::DemInfo& dem, const Positions& positions, con
   out.mesh.xyz.shrink_to_fit();
   out.mesh.faces.shrink_to_fit();
   out.quadrics.shrink_to_fit();
+  out.plane_xy.shrink_to_fit();
   report.budget = keep;
   report.kept = out.cell.size();
   report.simplify_s = seconds_since(t0);
@@ -230,6 +254,7 @@ core::TriMesh simplify_qem(const io::DemInfo& dem, const QemEngineOptions& optio
     merged.xyz.reserve(3 * vertices);
     merged.faces.reserve(faces);
     qo.quadrics.reserve(vertices);
+    if (positions.projected) qo.plane_xy.reserve(2 * vertices);
     cell.reserve(vertices);
   }
   for (PieceMesh& o : outputs) {
@@ -250,11 +275,16 @@ core::TriMesh simplify_qem(const io::DemInfo& dem, const QemEngineOptions& optio
       merged.xyz.insert(merged.xyz.end(), o.mesh.xyz.begin() + 3 * v,
                         o.mesh.xyz.begin() + 3 * v + 3);
       qo.quadrics.push_back(o.quadrics[v]);
+      if (positions.projected) {
+        qo.plane_xy.insert(qo.plane_xy.end(), o.plane_xy.begin() + 2 * v,
+                           o.plane_xy.begin() + 2 * v + 2);
+      }
     }
     for (const auto& t : o.mesh.faces) merged.faces.push_back({id[t[0]], id[t[1]], id[t[2]]});
     o = {};
   }
   seam_vertex = {};
+  if (positions.projected) qo.to_plane = positions.to_plane();
   qo.outline_collinear = positions.collinear(&cell, static_cast<std::uint32_t>(dem.width));
   const auto chord = dem.outline_chord_test(dem.outline_tolerance_m());
   if (chord) {

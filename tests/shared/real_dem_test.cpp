@@ -165,3 +165,35 @@ TEST_CASE("Andorra SRTM voids: qem keeps the footprint, and the pinched outline 
   }
   CHECK(places.size() == out.vertex_count());
 }
+
+#include "parallel/qem_engine.hpp"
+
+TEST_CASE("Andorra SRTM voids: qem's pieces in UTM leave every void open, unfolded on the grid too",
+          "[shared][qem]") {
+  // In UTM the grid lines bend: three cells of one row make a sliver that is counter-clockwise
+  // there but flat on the grid, across the void cell between them (1 face at 10 % before qem
+  // refused folds on the grid as well).
+  GDALAllRegister();
+  const io::Dem dem = io::read_dem(test::shared_data("pyrenees_andorra_voids.tif"), {}, nullptr);
+  for (const double percent : {10.0, 30.0}) {
+    INFO(percent << " %");
+    par::QemEngineOptions o;
+    o.keep.percent = percent;
+    o.levels = 2;
+    par::MetaStats st;
+    const core::TriMesh m = par::simplify_qem(dem, o, nullptr, &st);
+    CHECK(st.pieces.size() == 4);
+    CHECK(m.vertex_count() == par::target_count(o.keep, st.input_vertices));
+    const std::vector<double> xy = core::xy_of(m.xyz);
+    const core::MeshCheck out = core::check_mesh(xy, m.faces);
+    CHECK(out.clockwise_or_flat == 0);
+    CHECK(out.bad_edges == 0);
+    // On the grid (the inverse of the projection, as dpts-eval reads a mesh): no face flat or
+    // folded, none over a void's centre (within the reprojection's rounding, 1 % of a cell).
+    std::vector<double> grid = dem.grid_xy(xy);
+    for (std::size_t i = 1; i < grid.size(); i += 2) grid[i] = -grid[i];  // rows run south
+    CHECK(core::check_mesh(grid, m.faces).clockwise_or_flat == 0);
+    for (std::size_t i = 1; i < grid.size(); i += 2) grid[i] = -grid[i];
+    CHECK(core::faces_over_nodata(dem.grid, grid, m.faces, 0.01) == 0);
+  }
+}
