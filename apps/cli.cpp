@@ -40,8 +40,7 @@ Simplifies a DEM (a band of any raster GDAL reads) into a TIN that preserves sur
                        quadric collapse (triangle quadrics, a cost that sees surface area,
                        the outline's straight runs simplified too, the footprint kept
                        exactly), out of core: pieces collapsed concurrently with their
-                       seams locked, then stitched and collapsed on in one order (in
-                       memory, whole DEM, with --max-error)
+                       seams locked, then stitched and collapsed on in one order
   --levels C           vp-meta/pld-meta/qem: at least 2^C pieces (default 4)
   --value-points L     vp-meta/pld-meta: random points per piece value (default 20)
   --verbose            vp-meta/pld-meta/qem: print every piece's value and budget, and times

@@ -30,7 +30,7 @@ struct ParOptions {
   std::optional<double> max_error;  // --max-error M: vertical error bound (output CRS units)
   std::string max_error_text;       // M as given
   // qem without --max-error runs in its piece engine (parallel/qem_engine.hpp).
-  bool qem_pieces() const { return free_outline && !max_error; }
+  bool qem_pieces() const { return free_outline; }
   int levels = 4;
   int value_points = 20;
   bool verbose = false;

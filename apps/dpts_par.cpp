@@ -18,7 +18,6 @@
 #include "apps/report.hpp"
 #include "core/errors.hpp"
 #include "core/mesh_check.hpp"
-#include "core/qem.hpp"
 #include "core/qslim.hpp"
 #include "core/surface_sampling.hpp"
 #include "io/atomic_output_file.hpp"
@@ -180,81 +179,10 @@ int run_qslim(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printe
   const std::size_t input = grid.vertex_count();
   const std::size_t target = par::target_count(o.keep, input);
   core::QslimStats stats;
-  core::QemOptions qo;
-  if (o.free_outline) {
-    // A reprojected DEM's outline is straight in the frame, curved in the output CRS: a chord
-    // may stray from it by the outline tolerance at most, as in the elimination.
-    const auto chord_ok = dem.outline_chord_test(dem.outline_tolerance_m());
-    if (chord_ok) {
-      qo.outline_chord_ok = [&tin, chord_ok](std::uint32_t a, std::uint32_t b) {
-        return chord_ok(tin.cells[a], tin.cells[b]);
-      };
-    }
-  }
-  if (o.max_error) {
-    // Every valid cell centre a new triangle covers (found from its box in grid space, tested
-    // in the frame, where the cells are exactly where the mesh's vertices started) stays
-    // within the bound. Checked on each collapse's new triangles, which cover what changed.
-    double to_grid[2][2];
-    dem.frame.inverse(to_grid);
-    // note: a reprojected DEM's frame is a linear stand-in for the output CRS; heights
-    // interpolated there differ slightly from those in the output CRS (3.000224 for a bound of
-    // 3 on zion_canyon), so such a DEM gets 0.1 % of margin; any other 1e-9 for the rounding
-    // of the transform back to the output CRS.
-    const double limit = *o.max_error / unit * (dem.to_output ? 0.999 : 1 - 1e-9);
-    qo.triangle_ok = [&dem, to_grid, limit, unit](const double* a, const double* b,
-                                                  const double* c) {
-      const double* p[3] = {a, b, c};
-      double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
-      for (const double* q : p) {
-        for (int k = 0; k < 2; ++k) {
-          const double g = to_grid[k][0] * q[0] + to_grid[k][1] * q[1];
-          lo[k] = std::min(lo[k], g);
-          hi[k] = std::max(hi[k], g);
-        }
-      }
-      auto orient = [](const double* s, const double* t, double u, double w) {
-        return (t[0] - s[0]) * (w - s[1]) - (t[1] - s[1]) * (u - s[0]);
-      };
-      const double det = orient(a, b, c[0], c[1]);
-      if (!(det > 0)) return true;  // the fold test refuses it
-      const int c0 = std::max(0, static_cast<int>(std::floor(lo[0])));
-      const int c1 = std::min(dem.width - 1, static_cast<int>(std::ceil(hi[0])));
-      const int r0 = std::max(0, static_cast<int>(std::floor(lo[1])));
-      const int r1 = std::min(dem.height - 1, static_cast<int>(std::ceil(hi[1])));
-      constexpr double kOnEdge = -1e-12;  // barycentric slack: a cell on an edge counts
-      for (int r = r0; r <= r1; ++r) {
-        for (int col = c0; col <= c1; ++col) {
-          const double z = dem.grid.z[static_cast<std::size_t>(r) * dem.width + col];
-          if (std::isnan(z)) continue;
-          const double u = dem.frame.u(col, r), w = dem.frame.w(col, r);
-          const double l0 = orient(b, c, u, w) / det, l1 = orient(c, a, u, w) / det,
-                       l2 = orient(a, b, u, w) / det;
-          if (l0 < kOnEdge || l1 < kOnEdge || l2 < kOnEdge) continue;
-          if (std::fabs(l0 * a[2] + l1 * b[2] + l2 * c[2] - z / unit) > limit) return false;
-        }
-      }
-      return true;
-    };
-  }
-  core::TriMesh result;
-  if (o.free_outline) {
-    core::QemResult r = core::qem_simplify(std::move(grid), target, std::move(qo));
-    result = std::move(r.mesh);
-    stats.input_vertices = r.input_vertices;
-    stats.kept_vertices = result.vertex_count();
-    stats.rejected_folds = r.refused;
-  } else {
-    result = core::qslim(grid, target, &stats);
-  }
+  core::TriMesh result = core::qslim(grid, target, &stats);
   if (!progress(1.0, o.algo_text.c_str())) throw Cancelled();
   printer.finish();
-  if (!o.max_error) {
-    warn_kept(stats.kept_vertices, target);
-  } else if (stats.kept_vertices > target && o.keep_text != "none" && !o.quiet) {
-    std::cerr << "dpts-par: kept " << stats.kept_vertices << " vertices, not " << target
-              << ": --max-error " << o.max_error_text << " needs them\n";
-  }
+  warn_kept(stats.kept_vertices, target);
   if (o.verbose) {
     std::fprintf(stderr, "dpts-par: %s: %zu collapses refused (fold or border)\n",
                  o.algo_text.c_str(), stats.rejected_folds);
@@ -308,7 +236,12 @@ void after_pieces(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem,
   const std::string absurd = dpts::io::absurd_heights_note(dem, stats.absurd_cells);
   if (!absurd.empty()) std::cerr << "dpts-par: " << absurd << "\n";
   if (o.verbose) print_pieces(stats, values);
-  warn_kept(stats.kept_vertices, stats.target_vertices);
+  if (!o.max_error) {
+    warn_kept(stats.kept_vertices, stats.target_vertices);
+  } else if (stats.kept_vertices > stats.target_vertices && o.keep_text != "none" && !o.quiet) {
+    std::cerr << "dpts-par: kept " << stats.kept_vertices << " vertices, not "
+              << stats.target_vertices << ": --max-error " << o.max_error_text << " needs them\n";
+  }
 }
 
 // A piece engine's output written: the report's output and pieces, the summary line.
@@ -348,6 +281,7 @@ int run_qem(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer,
   qo.levels = o.levels;
   qo.tile_bytes = piece_cache(o);
   qo.memory_limit_bytes = cli::memory_limit_bytes(o);
+  if (o.max_error) qo.max_error = *o.max_error;
   par::MetaStats stats;
   core::TriMesh result = par::simplify_qem(dem, qo, progress, &stats);
   printer.finish();

@@ -464,12 +464,17 @@ class Collapser {
             // Corners counter-clockwise with the moving one in the middle.
             const double* r = pos(dst(e));
             const double* s = pos(fv_[prev_of(e)]);
-            if (orient(s, p.x, r) != CGAL::LEFT_TURN ||
-                (o_.triangle_ok && !o_.triangle_ok(s, p.x, r))) {
+            if (orient(s, p.x, r) != CGAL::LEFT_TURN) {
               ok = false;
-            } else if (!plane_.empty() && orient(&plane_[2 * fv_[prev_of(e)]], p.xy,
-                                                 &plane_[2 * dst(e)]) != CGAL::LEFT_TURN) {
-              ok = false;
+            } else if (plane_.empty()) {
+              ok = !o_.triangle_ok || o_.triangle_ok(s, p.x, r);
+            } else {
+              const double* ps = &plane_[2 * fv_[prev_of(e)]];
+              const double* pr = &plane_[2 * dst(e)];
+              const double s3[3] = {ps[0], ps[1], s[2]}, x3[3] = {p.xy[0], p.xy[1], p.x[2]},
+                           r3[3] = {pr[0], pr[1], r[2]};
+              ok = orient(s3, x3, r3) == CGAL::LEFT_TURN &&
+                   (!o_.triangle_ok || o_.triangle_ok(s3, x3, r3));
             }
           },
           [](std::uint32_t) {});

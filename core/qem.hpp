@@ -46,8 +46,8 @@ struct QemOptions {
   std::function<bool(std::uint32_t a, std::uint32_t v, std::uint32_t b)> outline_collinear;
   // Whether the outline may run straight from vertex a to vertex b (input ids); null: always.
   std::function<bool(std::uint32_t a, std::uint32_t b)> outline_chord_ok;
-  // Whether a triangle (corners a, b, c, counter-clockwise seen from above) may be made; null:
-  // always (--max-error's test).
+  // Whether a triangle (corners a, b, c, counter-clockwise seen from above; x, y in the second
+  // plane when there is one, below) may be made; null: always (--max-error's test).
   std::function<bool(const double* a, const double* b, const double* c)> triangle_ok;
   // A second plane the positions map to, where new triangles must be counter-clockwise too:
   // a reprojected DEM's grid (in frame units). Its mesh is in true output coordinates, where

@@ -12,6 +12,9 @@
 //     vertices' quadrics (so every vertex's quadric is what one whole-DEM run would have
 //     given), unlocks the seams and goes on collapsing to the target: the seams vanish, and
 //     the last collapses follow one global cost order, not per-piece budgets.
+// With a vertical bound (--max-error) every new triangle is tested against the valid cell
+// centres it covers: in a piece from its window, in the merge from the DEM read again block
+// by block through a cache of at most one tile.
 // Pieces are simplified independently and merged in k-d order, so the output does not depend
 // on the number of threads.
 #pragma once
@@ -34,6 +37,9 @@ struct QemEngineOptions {
   // then chooses among them in one order: more is closer to one whole-DEM run, and costs
   // memory and serial time in the merge.
   double slack = 1.3;
+  // The vertical error at every valid cell centre stays <= max_error metres (0: no bound);
+  // the count may then stay above the target.
+  double max_error = 0;
   // Refuse (InputError, with the estimate) a run estimated to need more memory; 0: no check.
   std::size_t memory_limit_bytes = 0;
 };

@@ -197,3 +197,46 @@ TEST_CASE("Andorra SRTM voids: qem's pieces in UTM leave every void open, unfold
     CHECK(core::faces_over_nodata(dem.grid, grid, m.faces, 0.01) == 0);
   }
 }
+
+TEST_CASE("qem's pieces with --max-error: every valid cell centre within the bound",
+          "[shared][qem]") {
+  // Across 8 pieces and the merge (which reads the cells under its triangles again, block by
+  // block), on a DEM in its own CRS and a reprojected one with voids; alone and with a count.
+  GDALAllRegister();
+  for (const char* name : {"st_helens_crater.tif", "pyrenees_andorra_voids.tif"}) {
+    const io::Dem dem = io::read_dem(test::shared_data(name), {}, nullptr);
+    const core::TriMesh full = dem.grid_mesh();
+    for (const double bound : {2.0, 8.0}) {
+      for (const std::size_t count : {std::size_t{3}, std::size_t{2000}}) {
+        INFO(name << ", --max-error " << bound << ", " << count << " vertices");
+        par::QemEngineOptions o;
+        o.keep.vertices = count;
+        o.levels = 3;
+        o.max_error = bound;
+        o.tile_bytes = 1 << 20;  // the merge's cache: 2 blocks of cells (at least 4 kept)
+        par::MetaStats st;
+        const core::TriMesh m = par::simplify_qem(dem, o, nullptr, &st);
+        CHECK(st.pieces.size() == 8);
+        CHECK(m.vertex_count() >= count);
+        CHECK(core::check_mesh(core::xy_of(m.xyz), m.faces).clockwise_or_flat == 0);
+        const core::PointLocator locate(m);
+        // Reprojected, the outline's chords may stray from the bent grid lines by 1 % of a
+        // cell: cells on the outline are found as dpts-eval does, within half a cell.
+        const double snap = dem.to_output ? 0.5 * dem.frame.metres_per_unit : 0.0;
+        double worst = 0;
+        std::size_t outside = 0;
+        for (std::size_t v = 0; v < full.vertex_count(); ++v) {
+          const auto hit = locate.locate(full.xyz[3 * v], full.xyz[3 * v + 1], snap);
+          if (!hit) {
+            ++outside;
+            continue;
+          }
+          worst = std::max(worst, std::fabs(hit->point.z - full.xyz[3 * v + 2]));
+        }
+        CHECK(outside == 0);
+        CHECK(worst <= bound);
+        CHECK(worst > 0.5 * bound);  // the bound is what stops it (or the count, at 2000)
+      }
+    }
+  }
+}
