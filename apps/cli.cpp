@@ -28,19 +28,22 @@ std::string par_help() {
        dpts-par --batch LIST|DIR --out-dir OUT [--jobs N] [options]
 
 Simplifies a DEM (a band of any raster GDAL reads) into a TIN that preserves surface
-(geodesic) distances, by Delaunay vertex elimination, and writes it as PLY.
+(geodesic) distances, and writes it as PLY.
 
-  --algo ALGO          vp: importance = volume between the surfaces before and after a
-                       removal (default); pld: preserve local distances; vp-meta, pld-meta:
-                       the paper's VP' and PLD' (k-d pieces, per-piece budgets from the
-                       pieces' mean ED/GD), run out of core: pieces are read, simplified
-                       and freed concurrently, and only the kept vertices are merged;
-                       qslim: Garland-Heckbert quadric edge collapse (the paper's
-                       competitor) with the outline locked and no folds; qem: dpts's own
-                       quadric collapse (triangle quadrics, a cost that sees surface area,
-                       the outline's straight runs simplified too, the footprint kept
-                       exactly), out of core: pieces collapsed concurrently with their
-                       seams locked, then stitched and collapsed on in one order
+  --algo ALGO          qem (default): dpts's quadric edge collapse (triangle quadrics, a
+                       cost that sees surface area, the outline's straight runs simplified
+                       too, the footprint kept exactly, no folds), out of core: pieces are
+                       read and collapsed concurrently with their seams locked, then
+                       stitched and collapsed on in one order; the best distances measured
+                       (README, Which algorithm).
+                       The DPTS paper's Delaunay vertex elimination: vp: importance =
+                       volume between the surfaces before and after a removal; pld:
+                       preserve local distances (both whole DEM in memory); vp-meta,
+                       pld-meta: the paper's VP' and PLD' (k-d pieces, per-piece budgets
+                       from the pieces' mean ED/GD), out of core: pieces are read,
+                       simplified and freed concurrently, and only the kept vertices are
+                       merged. qslim: Garland-Heckbert quadric edge collapse (the paper's
+                       competitor) with the outline locked and no folds, in memory
   --levels C           vp-meta/pld-meta/qem: at least 2^C pieces (default 4)
   --value-points L     vp-meta/pld-meta: random points per piece value (default 20)
   --verbose            vp-meta/pld-meta/qem: print every piece's value and budget, and times
@@ -115,8 +118,8 @@ ParOptions parse_par(const std::vector<std::string>& args) {
     } else if (arg == "--algo") {
       const std::string v = need(arg);
       o.meta = v == "vp-meta" || v == "pld-meta";
-      o.qslim = v == "qslim" || v == "qem";
-      o.free_outline = v == "qem";
+      o.qslim = v == "qslim";
+      o.qem = v == "qem";
       if (v == "vp" || v == "vp-meta" || v == "qslim" || v == "qem") {
         o.elimination.importance = core::Importance::vp;
       } else if (v == "pld" || v == "pld-meta") {
@@ -220,8 +223,8 @@ ParOptions parse_par(const std::vector<std::string>& args) {
   }
   if (o.help || o.version) return o;
   if (keep_seen && vertices_seen) throw UsageError("--keep and --vertices: give one, not both");
-  if (o.max_error && !o.free_outline) {
-    throw UsageError("--max-error: only with --algo qem so far");
+  if (o.max_error && !o.qem) {
+    throw UsageError("--max-error: only with --algo qem");
   }
   if (!keep_seen && !vertices_seen) {
     if (o.max_error) {

@@ -22,15 +22,14 @@ struct ParOptions {
   core::EliminationOptions elimination;
   par::KeepTarget keep;
   std::string keep_text = "10%";
-  std::string algo_text = "vp";
+  std::string algo_text = "qem";
   bool meta = false;   // --algo vp-meta | pld-meta: the piece engine (PLD'/VP')
-  bool qslim = false;  // --algo qslim (the paper's competitor) or qem
-  // --algo qem: quadric collapse with the outline's straight runs free
-  bool free_outline = false;
+  bool qslim = false;  // --algo qslim: the paper's competitor, whole DEM in memory
+  // --algo qem (the default): dpts's quadric collapse in its piece engine
+  // (parallel/qem_engine.hpp)
+  bool qem = true;
   std::optional<double> max_error;  // --max-error M: vertical error bound (output CRS units)
   std::string max_error_text;       // M as given
-  // qem without --max-error runs in its piece engine (parallel/qem_engine.hpp).
-  bool qem_pieces() const { return free_outline; }
   int levels = 4;
   int value_points = 20;
   bool verbose = false;

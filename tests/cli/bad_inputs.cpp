@@ -105,7 +105,7 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
     std::ofstream(dir / "huge.vrt")
         << "<VRTDataset rasterXSize=\"60000\" rasterYSize=\"60000\"><GeoTransform>0, 1, 0, 0, "
            "0, -1</GeoTransform><VRTRasterBand dataType=\"Float32\" band=\"1\"/></VRTDataset>\n";
-    add("60000 x 60000 raster, whole-DEM vp", {path("huge.vrt"), out}, 1,
+    add("60000 x 60000 raster, whole-DEM vp", {"--algo", "vp", path("huge.vrt"), out}, 1,
         path("huge.vrt") + ": 60000 x 60000 cells need about");
     std::ofstream(dir / "too_many.vrt")
         << "<VRTDataset rasterXSize=\"70000\" rasterYSize=\"70000\"><VRTRasterBand "
@@ -116,7 +116,9 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
   add("output too large for --max-memory (vp-meta)",
       {"--algo", "vp-meta", "--max-memory", "16", fine, out}, 1, fine + ": keeping 60 vertices needs about");
   const std::string medium = raster("medium.tif", 100, 80, hill);
-  add("DEM too large for --max-memory (vp)", {"--max-memory", "1", medium, out}, 1,
+  add("output too large for --max-memory (qem, the default)", {"--max-memory", "16", fine, out}, 1,
+      fine + ": keeping 60 vertices needs about");
+  add("DEM too large for --max-memory (vp)", {"--algo", "vp", "--max-memory", "1", medium, out}, 1,
       medium + ": 100 x 80 cells need about");
   {
     // Georeferenced by ground control points only.

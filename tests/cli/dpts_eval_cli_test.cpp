@@ -48,11 +48,15 @@ TEST_CASE("dpts-eval reports every figure in one JSON line", "[cli][eval]") {
   CHECK(js.back() == '}');
   for (const char* key : {"\"distance_error\":", "\"distance_error_sets\":[",
                           "\"vertical_rmse\":", "\"vertical_max\":", "\"mesh_vertices\":",
-                          "\"mesh_faces\":", "\"dem_vertices\":", "\"points\":20", "\"seconds\":",
-                          "\"faces_over_nodata\":0", "\"faces_not_ccw\":0", "\"coverage\":1,"}) {
+                          "\"mesh_faces\":", "\"dem_vertices\":", "\"points\":20",
+                          "\"seconds\":", "\"faces_over_nodata\":0", "\"faces_not_ccw\":0"}) {
     INFO(key);
     CHECK(js.find(key) != std::string::npos);
   }
+  // The footprint covered exactly, up to the rounding of the area sums.
+  const auto at = js.find("\"coverage\":");
+  REQUIRE(at != std::string::npos);
+  CHECK(std::stod(js.substr(at + 11)) == Approx(1.0).epsilon(1e-12));
   CHECK(r.out.find(
             "validity         0 faces not counter-clockwise, 0 bad edges, 0 faces over no-data") !=
         std::string::npos);

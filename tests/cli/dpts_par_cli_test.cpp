@@ -142,7 +142,7 @@ TEST_CASE("bad usage exits 2 with a one-line message naming the flag, creating n
        "--max-error 0: expected a positive number (units of the output CRS)"},
       {{"--algo", "qem", "--max-error", "1m", fx.dem, out},
        "--max-error 1m: expected a positive number (units of the output CRS)"},
-      {{"--max-error", "1", fx.dem, out}, "--max-error: only with --algo qem so far"},
+      {{"--algo", "vp", "--max-error", "1", fx.dem, out}, "--max-error: only with --algo qem"},
       {{fx.dem}, "expected INPUT and OUTPUT"},
       {{fx.dem, fx.dem}, fx.dem + ": OUTPUT is the INPUT file"},
       {{"--t-srs", "EPSG:4326", fx.dem, out}, "--t-srs EPSG:4326: expected a projected CRS"},
