@@ -93,9 +93,18 @@ ParOptions parse_par(const std::vector<std::string>& args) {
   ParOptions o;
   std::vector<std::string> positional;
   bool keep_seen = false, vertices_seen = false;
+  bool options_done = false;  // after "--" every argument is a path
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::size_t first = i;
     std::string arg = args[i];
+    if (options_done) {
+      positional.push_back(arg);
+      continue;
+    }
+    if (arg == "--") {
+      options_done = true;
+      continue;
+    }
     std::string value;
     bool has_inline = false;
     if (arg.rfind("--", 0) == 0) {
@@ -249,6 +258,11 @@ ParOptions parse_par(const std::vector<std::string>& args) {
   }
   o.input = positional[0];
   o.output = positional[1];
+  if (!o.report.empty() && (same_file(o.report, o.input) || same_file(o.report, o.output))) {
+    throw UsageError("--report " + o.report + ": is the " +
+                     (same_file(o.report, o.input) ? "INPUT" : "OUTPUT") +
+                     " file; refusing to overwrite it");
+  }
   return o;
 }
 

@@ -322,13 +322,15 @@ int run_meta(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer
 
 int run(const dpts::cli::ParOptions& o) {
   using namespace dpts;
-  if (o.help) {
-    std::cout << cli::par_help();
-    return 0;
-  }
-  if (o.version) {
-    std::cout << "dpts-par " << DPTS_VERSION << " (GDAL " << GDALVersionInfo("RELEASE_NAME")
-              << ")\n";
+  if (o.help || o.version) {
+    if (o.help) {
+      std::cout << cli::par_help();
+    } else {
+      std::cout << "dpts-par " << DPTS_VERSION << " (GDAL " << GDALVersionInfo("RELEASE_NAME")
+                << ")\n";
+    }
+    std::cout.flush();
+    if (!std::cout) throw IoError("cannot write to standard output");
     return 0;
   }
   const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();

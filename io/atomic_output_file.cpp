@@ -16,7 +16,11 @@ namespace dpts::io {
 AtomicOutputFile::AtomicOutputFile(std::filesystem::path final_path)
     : final_(std::move(final_path)) {
   const auto dir = final_.has_parent_path() ? final_.parent_path() : std::filesystem::path(".");
-  std::string pattern = (dir / ("." + final_.filename().string() + ".partial-XXXXXX")).string();
+  // The temporary name is 16 bytes longer than the output's: a name near the limit of 255
+  // (NAME_MAX) is cut for it.
+  std::string base = final_.filename().string();
+  if (base.size() > 255 - 16) base.resize(255 - 16);
+  std::string pattern = (dir / ("." + base + ".partial-XXXXXX")).string();
   std::vector<char> name(pattern.begin(), pattern.end());
   name.push_back('\0');
   const int fd = ::mkstemp(name.data());
@@ -56,10 +60,16 @@ void AtomicOutputFile::commit() {
     ::close(fd);
     if (rc != 0) throw IoError(final_.string() + ": write failed (" + std::strerror(errno) + ")");
   }
-  // mkstemp creates 0600; give the output the usual permissions (umask applies).
-  const mode_t mask = ::umask(0);
-  ::umask(mask);
-  ::chmod(temp_.c_str(), 0666 & ~mask);
+  // mkstemp creates 0600: a file replaced keeps its permissions, a new one gets the usual
+  // ones (umask applies).
+  struct stat old {};
+  if (::stat(final_.c_str(), &old) == 0 && S_ISREG(old.st_mode)) {
+    ::chmod(temp_.c_str(), old.st_mode & 07777);
+  } else {
+    const mode_t mask = ::umask(0);
+    ::umask(mask);
+    ::chmod(temp_.c_str(), 0666 & ~mask);
+  }
   std::error_code ec;
   std::filesystem::rename(temp_, final_, ec);
   if (ec)

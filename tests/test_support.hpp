@@ -54,6 +54,7 @@ struct RunOptions {
   double signal_after_s = 0;        // ...or once this many seconds have passed (0: never)
   int signal = 15;                  // SIGTERM
   std::string stdout_to;            // a file stdout goes to (e.g. /dev/full), not captured
+  std::string cwd;                  // the child's working folder (empty: ours)
 };
 
 // Runs an executable with arguments (no shell), capturing stdout and stderr.

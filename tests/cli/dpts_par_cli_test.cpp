@@ -215,6 +215,68 @@ TEST_CASE("help and version exit 0 on stdout", "[cli]") {
   CHECK(v.out.rfind("dpts-par 0.1.0", 0) == 0);
 }
 
+TEST_CASE("help and version that cannot be written exit 1", "[cli][robust]") {
+  test::RunOptions full;
+  full.stdout_to = "/dev/full";
+  for (const char* flag : {"--help", "--version"}) {
+    INFO(flag);
+    const auto r = test::run(kExe, {flag}, full);
+    CHECK(r.exit_code == 1);
+    CHECK(r.err == "dpts-par: error: cannot write to standard output\n");
+  }
+}
+
+TEST_CASE("a report path naming the input or the output is refused before anything is written",
+          "[cli][robust]") {
+  Fixture fx;
+  const auto out = (fx.dir / "out.ply").string();
+  std::ofstream(out) << "precious";
+  auto bytes = [](const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const std::string dem_bytes = bytes(fx.dem);
+  const auto r1 = test::run(kExe, {"--report", fx.dem, fx.dem, out});
+  CHECK(r1.exit_code == 2);
+  CHECK(r1.err.rfind("dpts-par: --report " + fx.dem + ": is the INPUT file; refusing", 0) == 0);
+  // The same file by another name.
+  const auto other = (fx.dir / "." / "out.ply").string();
+  const auto r2 = test::run(kExe, {"--report", other, fx.dem, out});
+  CHECK(r2.exit_code == 2);
+  CHECK(r2.err.rfind("dpts-par: --report " + other + ": is the OUTPUT file; refusing", 0) == 0);
+  CHECK(bytes(fx.dem) == dem_bytes);
+  CHECK(bytes(out) == "precious");
+  CHECK(fx.dir.files() == std::vector<std::string>{"dem.tif", "out.ply"});
+}
+
+TEST_CASE("a double dash ends the options: an input named like a flag", "[cli][robust]") {
+  Fixture fx;
+  std::filesystem::copy_file(fx.dem, fx.dir / "-dem.tif");
+  test::RunOptions here;
+  here.cwd = fx.dir.path().string();
+  const auto r = test::run(kExe, {"--quiet", "--", "-dem.tif", "--out.ply"}, here);
+  CHECK(r.exit_code == 0);
+  CHECK(std::filesystem::exists(fx.dir / "--out.ply"));
+}
+
+TEST_CASE("an output name of 255 bytes is written, and a replaced output keeps its permissions",
+          "[cli][robust]") {
+  Fixture fx;
+  const auto out = fx.dir / (std::string(251, 'a') + ".ply");
+  auto r = test::run(kExe, {"--quiet", fx.dem, out.string()});
+  CHECK(r.exit_code == 0);
+  CHECK(std::filesystem::file_size(out) > 0);
+  std::filesystem::permissions(out, std::filesystem::perms::owner_read |
+                                        std::filesystem::perms::owner_write |
+                                        std::filesystem::perms::group_read);
+  r = test::run(kExe, {"--quiet", fx.dem, out.string()});
+  CHECK(r.exit_code == 0);
+  CHECK(std::filesystem::status(out).permissions() ==
+        (std::filesystem::perms::owner_read | std::filesystem::perms::owner_write |
+         std::filesystem::perms::group_read));
+  CHECK(fx.dir.files().size() == 2);
+}
+
 TEST_CASE("SIGTERM and SIGINT stop a long run promptly, leaving no output and no temporary file",
           "[cli][robust]") {
   test::TempDir dir;
