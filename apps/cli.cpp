@@ -1,9 +1,11 @@
 // Command-line parsing and progress reporting for dpts-par.
 #include "apps/cli.hpp"
 
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -21,7 +23,16 @@ bool same_file(const std::string& a, const std::string& b) {
   if (std::filesystem::exists(b, ec) && std::filesystem::equivalent(a, b, ec)) return true;
   return std::filesystem::weakly_canonical(a, ec) == std::filesystem::weakly_canonical(b, ec);
 }
-namespace {}  // namespace
+void reopen_closed_std_streams() {
+  for (int fd = 0; fd <= 2; ++fd) {
+    if (::fcntl(fd, F_GETFD) != -1 || errno != EBADF) continue;
+    const int null = ::open("/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
+    if (null >= 0 && null != fd) {
+      ::dup2(null, fd);
+      ::close(null);
+    }
+  }
+}
 
 std::string par_help() {
   return R"(usage: dpts-par [options] INPUT OUTPUT

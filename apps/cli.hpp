@@ -67,6 +67,10 @@ T parse_number(const std::string& flag, const std::string& text, T min, const ch
 // outputs must not overwrite inputs.
 bool same_file(const std::string& a, const std::string& b);
 
+// Standard streams the caller closed (2>&-) reopened on /dev/null, before any file is opened:
+// otherwise an output file could get descriptor 2 and progress text would land in it.
+void reopen_closed_std_streams();
+
 // The memory a run may use, in bytes: --max-memory, or what the system has available now.
 std::size_t memory_limit_bytes(const ParOptions& o);
 

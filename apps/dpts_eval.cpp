@@ -517,6 +517,7 @@ int run(const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  dpts::cli::reopen_closed_std_streams();
   GDALAllRegister();
   CPLPushErrorHandler(CPLQuietErrorHandler);
   if (!CPLGetConfigOption("GDAL_CACHEMAX", nullptr)) CPLSetConfigOption("GDAL_CACHEMAX", "64");

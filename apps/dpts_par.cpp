@@ -389,12 +389,17 @@ std::string self_path(const char* argv0) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // note: sigaction without SA_RESTART, so a batch's waitpid() returns on a signal.
+  dpts::cli::reopen_closed_std_streams();
+  // note: sigaction without SA_RESTART, so a batch's waitpid() returns on a signal. A hang-up
+  // (the terminal closed) stops the run as Ctrl-C does; a closed pipe on stderr does not
+  // kill it (the write fails instead), so the temporary file is always removed.
   struct sigaction sa {};
   sa.sa_handler = on_signal;
   sigemptyset(&sa.sa_mask);
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
+  sigaction(SIGHUP, &sa, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
   GDALAllRegister();
   CPLPushErrorHandler(CPLQuietErrorHandler);
   // A bounded block cache: GDAL's default (5 % of RAM) would cache the whole raster.

@@ -55,6 +55,7 @@ struct RunOptions {
   int signal = 15;                  // SIGTERM
   std::string stdout_to;            // a file stdout goes to (e.g. /dev/full), not captured
   std::string cwd;                  // the child's working folder (empty: ours)
+  bool close_stderr = false;        // start the child with descriptor 2 closed (2>&-)
 };
 
 // Runs an executable with arguments (no shell), capturing stdout and stderr.

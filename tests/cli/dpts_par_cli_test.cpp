@@ -215,6 +215,30 @@ TEST_CASE("help and version exit 0 on stdout", "[cli]") {
   CHECK(v.out.rfind("dpts-par 0.1.0", 0) == 0);
 }
 
+TEST_CASE("with stderr closed the output is the same bytes (no progress text in it)",
+          "[cli][robust]") {
+  test::TempDir dir;
+  const auto dem = (dir / "big.tif").string();
+  test::write_geotiff(
+      dem,
+      test::make_grid(500, 500,
+                      [](int c, int r) {
+                        return 500.0 + 40.0 * std::sin(c * 0.05) * std::cos(r * 0.07) + 0.1 * r;
+                      }),
+      {400000, 10, 0, 3800000, 0, -10}, test::epsg_wkt(32611));
+  auto bytes = [](const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const auto a = (dir / "a.ply").string(), b = (dir / "b.ply").string();
+  // --verbose: the pieces' table and the stage times are printed while the output is open.
+  REQUIRE(test::run(kExe, {"--verbose", "--threads", "1", dem, a}).exit_code == 0);
+  test::RunOptions closed;
+  closed.close_stderr = true;
+  REQUIRE(test::run(kExe, {"--verbose", "--threads", "1", dem, b}, closed).exit_code == 0);
+  CHECK(bytes(a) == bytes(b));
+}
+
 TEST_CASE("help and version that cannot be written exit 1", "[cli][robust]") {
   test::RunOptions full;
   full.stdout_to = "/dev/full";
@@ -277,8 +301,9 @@ TEST_CASE("an output name of 255 bytes is written, and a replaced output keeps i
   CHECK(fx.dir.files().size() == 2);
 }
 
-TEST_CASE("SIGTERM and SIGINT stop a long run promptly, leaving no output and no temporary file",
-          "[cli][robust]") {
+TEST_CASE(
+    "SIGTERM, SIGINT and SIGHUP stop a long run promptly, leaving no output and no temporary file",
+    "[cli][robust]") {
   test::TempDir dir;
   const auto dem = (dir / "big.tif").string();
   test::write_geotiff(dem, test::make_grid(900, 900, [](int c, int r) {
@@ -288,7 +313,10 @@ TEST_CASE("SIGTERM and SIGINT stop a long run promptly, leaving no output and no
   const auto out = (dir / "out.ply").string();
   std::ofstream(out) << "precious";  // an older result: must survive the interrupted run
   for (const auto& [algo, sig] : {std::pair<std::string, int>{"vp", SIGTERM},
-                                  {"vp-meta", SIGTERM}, {"vp", SIGINT}}) {
+                                  {"vp-meta", SIGTERM},
+                                  {"vp", SIGINT},
+                                  {"qem", SIGTERM},
+                                  {"qem", SIGHUP}}) {
     INFO(algo << ", signal " << sig);
     test::RunOptions ro;
     ro.signal_when = "simplify";  // progress shows once the run has lasted a second
