@@ -342,6 +342,8 @@ int run(const dpts::cli::ParOptions& o) {
   if (dpts::cli::same_file(o.input, o.output)) {
     throw UsageError(o.output + ": OUTPUT is the INPUT file; refusing to overwrite it");
   }
+  // A report that cannot be written fails the run before any work (a probe, removed again).
+  if (!o.report.empty()) io::AtomicOutputFile probe(o.report);
   const auto start = std::chrono::steady_clock::now();
   cli::ProgressPrinter printer("dpts-par", o.quiet, &g_cancel);
   const core::Progress progress = [&](double f, std::string_view s) {
@@ -408,8 +410,12 @@ int main(int argc, char** argv) {
   const std::vector<std::string> args(argv + 1, argv + argc);
   dpts::cli::ParOptions o;
   auto report = [&](const std::string& status, int code, const std::string& error) {
-    if (!o.help && !o.version) g_report.write(o, status, code, error);
-    return code;
+    if (o.help || o.version) return code;
+    const std::string failed = g_report.write(o, status, code, error);
+    // A run that failed said why already; one that worked fails now.
+    if (failed.empty() || code != 0) return code;
+    std::cerr << "dpts-par: error: report not written: " << failed << "\n";
+    return 1;
   };
   try {
     o = dpts::cli::parse_par(args);

@@ -135,9 +135,9 @@ std::string pieces_json(const par::MetaStats& stats) {
   return out.str();
 }
 
-void RunReport::write(const ParOptions& o, const std::string& status, int exit_code,
-                      const std::string& error) const {
-  if (path.empty()) return;
+std::string RunReport::write(const ParOptions& o, const std::string& status, int exit_code,
+                             const std::string& error) const {
+  if (path.empty()) return {};
   try {
     io::JsonArray command;
     for (const std::string& a : args) command.add(a);
@@ -159,8 +159,9 @@ void RunReport::write(const ParOptions& o, const std::string& status, int exit_c
     out.stream() << j.str() << "\n";
     out.commit();
   } catch (const std::exception& e) {
-    std::cerr << "dpts-par: warning: report not written: " << e.what() << "\n";
+    return e.what();
   }
+  return {};
 }
 
 }  // namespace dpts::cli

@@ -60,9 +60,9 @@ struct RunReport {
   StageClock clock;
 
   // Writes the report (atomically). status: "ok", "failed" or "interrupted". Never throws:
-  // a report that cannot be written is said on stderr.
-  void write(const ParOptions& o, const std::string& status, int exit_code,
-             const std::string& error) const;
+  // returns why the report could not be written ("" when it was).
+  std::string write(const ParOptions& o, const std::string& status, int exit_code,
+                    const std::string& error) const;
 };
 
 }  // namespace dpts::cli

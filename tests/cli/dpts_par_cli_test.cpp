@@ -273,6 +273,17 @@ TEST_CASE("a report path naming the input or the output is refused before anythi
   CHECK(fx.dir.files() == std::vector<std::string>{"dem.tif", "out.ply"});
 }
 
+TEST_CASE("a report that cannot be written fails the run before any work", "[cli][robust]") {
+  Fixture fx;
+  const auto out = (fx.dir / "out.ply").string();
+  const auto report = (fx.dir / "no-such-folder" / "r.json").string();
+  const auto r = test::run(kExe, {"--report", report, fx.dem, out});
+  CHECK(r.exit_code == 1);
+  CHECK(r.err ==
+        "dpts-par: error: " + report + ": cannot create output (No such file or directory)\n");
+  CHECK(fx.dir.files() == std::vector<std::string>{"dem.tif"});
+}
+
 TEST_CASE("a double dash ends the options: an input named like a flag", "[cli][robust]") {
   Fixture fx;
   std::filesystem::copy_file(fx.dem, fx.dir / "-dem.tif");
