@@ -50,6 +50,15 @@ bool is_sidecar(const fs::path& p) {
   return name.empty() || name[0] == '.';
 }
 
+bool opens_as_raster(const std::string& path) {
+  if (GDALIdentifyDriverEx(path.c_str(), GDAL_OF_RASTER, nullptr, nullptr) == nullptr) return false;
+  GDALDatasetH ds =
+      GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr);
+  if (ds == nullptr) return false;
+  GDALClose(ds);
+  return true;
+}
+
 std::string read_file(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   std::ostringstream ss;
@@ -105,9 +114,10 @@ std::vector<std::string> batch_inputs(const std::string& source) {
     for (const auto& entry : fs::directory_iterator(source, ec)) {
       if (!entry.is_regular_file(ec) || is_sidecar(entry.path())) continue;
       const std::string path = entry.path().string();
-      if (is_raster_name(entry.path()) || GDALIdentifyDriver(path.c_str(), nullptr) != nullptr) {
-        inputs.push_back(path);
-      }
+      // A raster's name (a broken one is then a failure to report), or a file a raster driver
+      // opens; vector data and tables (.geojson, .shp, a .csv of points that the XYZ driver
+      // claims but cannot open as a grid) are not inputs.
+      if (is_raster_name(entry.path()) || opens_as_raster(path)) inputs.push_back(path);
     }
     std::sort(inputs.begin(), inputs.end());
     return inputs;
@@ -115,6 +125,11 @@ std::vector<std::string> batch_inputs(const std::string& source) {
   std::ifstream list(source);
   if (!fs::is_regular_file(source, ec) || !list) {
     throw UsageError("--batch " + source + ": not a folder or a readable list of DEMs");
+  }
+  if (GDALIdentifyDriverEx(source.c_str(), GDAL_OF_RASTER, nullptr, nullptr) != nullptr) {
+    throw UsageError("--batch " + source +
+                     ": is a raster, not a folder or a list of DEMs (one DEM: dpts-par " + source +
+                     " OUTPUT)");
   }
   const fs::path base = fs::path(source).parent_path();
   std::string line;

@@ -150,6 +150,22 @@ TEST_CASE("a batch records the broken input, goes on, and resumes without redoin
   CHECK(test::run(kExe, other).exit_code == 0);
 }
 
+TEST_CASE("a batch folder's tables and vector files are not inputs", "[cli][batch]") {
+  test::TempDir dir;
+  make_folder(dir / "in", 12, 2);
+  fs::remove(dir / "in" / "broken.tif");
+  std::ofstream(dir / "in" / "points.csv") << "x,y,z\n400000,3800000,12\n";
+  std::ofstream(dir / "in" / "roads.geojson") << R"({"type":"FeatureCollection","features":[]})"
+                                              << "\n";
+  const auto r = test::run(
+      kExe, {"--batch", (dir / "in").string(), "--out-dir", (dir / "out").string(), "--quiet"});
+  CHECK(r.exit_code == 0);
+  const std::string summary = slurp(dir / "out" / "batch-summary.json");
+  CHECK(field(summary, "inputs") == "2");
+  CHECK(field(summary, "ok") == "2");
+  CHECK(field(summary, "failed") == "0");
+}
+
 TEST_CASE("batch usage errors exit 2", "[cli][batch]") {
   test::TempDir dir;
   const std::string d = dir.path().string();
@@ -159,6 +175,13 @@ TEST_CASE("batch usage errors exit 2", "[cli][batch]") {
   const auto jobs = test::run(kExe, {"--jobs", "2", "a.tif", "b.ply"});
   CHECK(jobs.exit_code == 2);
   CHECK(jobs.err.rfind("dpts-par: --jobs: needs --batch", 0) == 0);
+  make_folder(dir / "in", 10, 1);
+  const std::string raster = (dir / "in" / "dem0.tif").string();
+  const auto one = test::run(kExe, {"--batch", raster, "--out-dir", d + "/out"});
+  CHECK(one.exit_code == 2);
+  CHECK(one.err.rfind("dpts-par: --batch " + raster + ": is a raster, not a folder or a list", 0) ==
+        0);
+  CHECK(!fs::exists(dir / "out"));
   const auto missing = test::run(kExe, {"--batch", d + "/nothing", "--out-dir", d + "/out"});
   CHECK(missing.exit_code == 2);
   CHECK(missing.err.rfind("dpts-par: --batch " + d + "/nothing: not a folder or a readable list",
