@@ -342,8 +342,11 @@ int run(const dpts::cli::ParOptions& o) {
   if (dpts::cli::same_file(o.input, o.output)) {
     throw UsageError(o.output + ": OUTPUT is the INPUT file; refusing to overwrite it");
   }
-  // A report that cannot be written fails the run before any work (a probe, removed again).
-  if (!o.report.empty()) io::AtomicOutputFile probe(o.report);
+  // A report that cannot be written fails the run before any work (a probe, removed again;
+  // not for a pipe or device, which opening would block or consume).
+  if (!o.report.empty() && !io::AtomicOutputFile::streams_to(o.report)) {
+    io::AtomicOutputFile probe(o.report);
+  }
   const auto start = std::chrono::steady_clock::now();
   cli::ProgressPrinter printer("dpts-par", o.quiet, &g_cancel);
   const core::Progress progress = [&](double f, std::string_view s) {

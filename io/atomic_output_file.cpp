@@ -13,8 +13,38 @@
 
 namespace dpts::io {
 
-AtomicOutputFile::AtomicOutputFile(std::filesystem::path final_path)
-    : final_(std::move(final_path)) {
+namespace fs = std::filesystem;
+
+bool AtomicOutputFile::streams_to(const fs::path& final_path) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(final_path, ec);
+  return !ec && (fs::is_fifo(st) || fs::is_character_file(st) || fs::is_socket(st));
+}
+
+AtomicOutputFile::AtomicOutputFile(fs::path final_path) : final_(std::move(final_path)) {
+  std::error_code ec;
+  if (streams_to(final_)) {
+    // note: opened by its own name, not its link's target: /dev/stdout's target in /proc
+    // names a pipe ("pipe:[1234]") that only the link opens.
+    stream_ = true;
+    out_.open(final_, std::ios::binary | std::ios::out);
+    if (!out_) {
+      throw IoError(final_.string() + ": cannot open output for writing (" + std::strerror(errno) +
+                    ")");
+    }
+    return;
+  }
+  const fs::file_status st = fs::status(final_, ec);
+  if (fs::is_directory(st)) throw IoError(final_.string() + ": is a folder, not an output file");
+  if (fs::is_block_file(st)) {
+    throw IoError(final_.string() + ": is a block device; refusing to write to it");
+  }
+  // A link (even a dangling one): the output goes where it points, the link stays.
+  for (int hops = 0; hops < 40 && fs::is_symlink(fs::symlink_status(final_, ec)); ++hops) {
+    const fs::path target = fs::read_symlink(final_, ec);
+    if (ec) break;
+    final_ = target.is_absolute() ? target : final_.parent_path() / target;
+  }
   const auto dir = final_.has_parent_path() ? final_.parent_path() : std::filesystem::path(".");
   // The temporary name is 16 bytes longer than the output's: a name near the limit of 255
   // (NAME_MAX) is cut for it.
@@ -38,7 +68,7 @@ AtomicOutputFile::AtomicOutputFile(std::filesystem::path final_path)
 }
 
 AtomicOutputFile::~AtomicOutputFile() {
-  if (committed_) return;
+  if (committed_ || stream_) return;
   out_.close();
   std::error_code ec;
   std::filesystem::remove(temp_, ec);
@@ -53,6 +83,10 @@ void AtomicOutputFile::commit() {
   }
   out_.close();
   if (out_.fail()) throw IoError(final_.string() + ": write failed on close");
+  if (stream_) {
+    committed_ = true;
+    return;
+  }
   // note: fsync before rename, so a crash never leaves a renamed but empty file.
   const int fd = ::open(temp_.c_str(), O_RDONLY);
   if (fd >= 0) {

@@ -11,7 +11,14 @@ class AtomicOutputFile {
  public:
   // Creates a new, uniquely named temporary file in final_path's directory (never touching
   // an existing file). Throws IoError naming final_path if the directory is not writable.
+  // A symbolic link is written through: the file appears at its target, the link stays. A
+  // FIFO, character device or socket (a pipe, /dev/stdout, /dev/null) is not replaced but
+  // written into directly, as a stream (what a failed run wrote there stays written). A
+  // folder or a block device is refused.
   explicit AtomicOutputFile(std::filesystem::path final_path);
+
+  // Whether final_path (links followed) is written as a stream (see above).
+  static bool streams_to(const std::filesystem::path& final_path);
   ~AtomicOutputFile();  // not committed: removes the temporary file
   AtomicOutputFile(const AtomicOutputFile&) = delete;
   AtomicOutputFile& operator=(const AtomicOutputFile&) = delete;
@@ -26,6 +33,7 @@ class AtomicOutputFile {
   std::filesystem::path temp_;
   std::ofstream out_;
   bool committed_ = false;
+  bool stream_ = false;  // written into final_ directly
 };
 
 }  // namespace dpts::io

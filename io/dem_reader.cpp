@@ -227,6 +227,13 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
   if (!virtual_file && !std::filesystem::exists(path, ec)) throw InputError(path + ": no such file");
   if (!virtual_file && std::filesystem::is_directory(path, ec))
     throw InputError(path + ": is a directory, not a raster");
+  // A FIFO with no writer would block the open forever, a device read without end.
+  const std::filesystem::file_status st = std::filesystem::status(path, ec);
+  if (!virtual_file && !std::filesystem::is_regular_file(st)) {
+    throw InputError(path +
+                     ": is a pipe or a device, not a raster file (a raster on standard input: "
+                     "/vsistdin/)");
+  }
 
   CPLErrorReset();
   std::unique_ptr<GDALDataset, DatasetCloser> ds(

@@ -1,6 +1,8 @@
 // The bad-input table (see bad_inputs.hpp).
 #include "cli/bad_inputs.hpp"
 
+#include <sys/stat.h>
+
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -92,6 +94,11 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
   };
   const std::string zero = vrt("zero_cell.vrt", "400000, 0, 0, 3800000, 0, -10");
   add("zero pixel size", {zero, out}, 1, zero + ": geotransform has zero cell size");
+  ::mkfifo((dir / "pipe.tif").c_str(), 0600);
+  add("a FIFO with no writer", {path("pipe.tif"), out}, 1,
+      path("pipe.tif") + ": is a pipe or a device, not a raster file");
+  add("a character device", {"/dev/zero", out}, 1,
+      "/dev/zero: is a pipe or a device, not a raster file");
   const std::string degenerate = vrt("degenerate.vrt", "400000, 10, 20, 3800000, 5, 10");
   add("degenerate geotransform (parallel axes)", {degenerate, out}, 1,
       degenerate + ": geotransform has zero cell size");

@@ -1,13 +1,15 @@
 // dpts-par as users run it: exit codes, one-line messages, no output left on failure.
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
+#include <sys/stat.h>
 
 #include <catch2/catch.hpp>
-#include <csignal>
 #include <cmath>
+#include <csignal>
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <thread>
 
 #include "core/mesh_check.hpp"
 #include "io/ply.hpp"
@@ -282,6 +284,60 @@ TEST_CASE("a report that cannot be written fails the run before any work", "[cli
   CHECK(r.err ==
         "dpts-par: error: " + report + ": cannot create output (No such file or directory)\n");
   CHECK(fx.dir.files() == std::vector<std::string>{"dem.tif"});
+}
+
+TEST_CASE("an output that is a link, a FIFO or a device is written through, never replaced",
+          "[cli][robust]") {
+  Fixture fx;
+  namespace fs = std::filesystem;
+  auto bytes = [](const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  SECTION("a link: the file appears at its target, the link stays") {
+    fs::create_directory(fx.dir / "real");
+    std::ofstream(fx.dir / "real" / "t.ply") << "old";
+    fs::create_symlink("real/t.ply", fx.dir / "link.ply");
+    fs::create_symlink("real/new.ply", fx.dir / "dangling.ply");
+    for (const char* link : {"link.ply", "dangling.ply"}) {
+      INFO(link);
+      const auto r = test::run(kExe, {"--quiet", fx.dem, (fx.dir / link).string()});
+      CHECK(r.exit_code == 0);
+      CHECK(fs::is_symlink(fx.dir / link));
+      CHECK(bytes(fx.dir / link).rfind("ply\n", 0) == 0);
+    }
+    CHECK(bytes(fx.dir / "real" / "t.ply") == bytes(fx.dir / "real" / "new.ply"));
+    CHECK(fx.dir.files() ==
+          std::vector<std::string>{"dangling.ply", "dem.tif", "link.ply", "real"});
+  }
+  SECTION("a FIFO: streamed into, still a FIFO") {
+    const auto fifo = fx.dir / "pipe.ply";
+    REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+    std::string got;
+    std::thread reader([&] { got = bytes(fifo); });
+    const auto r = test::run(kExe, {"--quiet", fx.dem, fifo.string()});
+    reader.join();
+    CHECK(r.exit_code == 0);
+    CHECK(fs::is_fifo(fifo));
+    const auto file = (fx.dir / "file.ply").string();
+    REQUIRE(test::run(kExe, {"--quiet", fx.dem, file}).exit_code == 0);
+    CHECK(got == bytes(file));
+  }
+  SECTION("/dev/null stays a device") {
+    CHECK(test::run(kExe, {"--quiet", fx.dem, "/dev/null"}).exit_code == 0);
+    CHECK(fs::is_character_file("/dev/null"));
+    CHECK(fx.dir.files() == std::vector<std::string>{"dem.tif"});
+    const auto out = (fx.dir / "out.ply").string();
+    CHECK(test::run(kExe, {"--quiet", "--report", "/dev/null", fx.dem, out}).exit_code == 0);
+    CHECK(fs::is_character_file("/dev/null"));
+    CHECK(fx.dir.files() == std::vector<std::string>{"dem.tif", "out.ply"});
+  }
+  SECTION("a folder is refused") {
+    const auto r = test::run(kExe, {fx.dem, fx.dir.path().string()});
+    CHECK(r.exit_code == 1);
+    CHECK(r.err ==
+          "dpts-par: error: " + fx.dir.path().string() + ": is a folder, not an output file\n");
+  }
 }
 
 TEST_CASE("a double dash ends the options: an input named like a flag", "[cli][robust]") {
