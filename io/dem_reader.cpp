@@ -219,6 +219,35 @@ std::function<bool(std::uint32_t, std::uint32_t)> DemInfo::outline_chord_test(
   };
 }
 
+namespace {
+
+// A raw raster (ENVI, EHdr and the like: a header and a plain data file) cut short reads as
+// zeros beyond its end, without an error from GDAL: its data file must hold every cell.
+void check_raw_size(GDALDataset& ds, const std::string& path) {
+  GDALDataset::RawBinaryLayout layout;
+  if (!ds.GetRawBinaryLayout(layout) || layout.osRawFilename.empty()) return;
+  const GIntBig w = ds.GetRasterXSize(), h = ds.GetRasterYSize(), b = ds.GetRasterCount();
+  GIntBig last = 0;  // the farthest byte any cell starts at, from the image's offset
+  for (const GIntBig r : {GIntBig{0}, h - 1}) {
+    for (const GIntBig c : {GIntBig{0}, w - 1}) {
+      for (const GIntBig k : {GIntBig{0}, b - 1}) {
+        last = std::max(last,
+                        r * layout.nLineOffset + c * layout.nPixelOffset + k * layout.nBandOffset);
+      }
+    }
+  }
+  const GIntBig need =
+      static_cast<GIntBig>(layout.nImageOffset) + last + GDALGetDataTypeSizeBytes(layout.eDataType);
+  VSIStatBufL st;
+  if (VSIStatL(layout.osRawFilename.c_str(), &st) != 0) return;  // the read then fails
+  if (static_cast<GIntBig>(st.st_size) < need) {
+    throw InputError(path + ": truncated: its data file " + layout.osRawFilename + " has " +
+                     std::to_string(st.st_size) + " bytes, its cells need " + std::to_string(need));
+  }
+}
+
+}  // namespace
+
 DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
   DemInfo dem;
   dem.path = path;
@@ -250,6 +279,7 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
                      std::to_string(options.band));
   }
   const int width = ds->GetRasterXSize(), height = ds->GetRasterYSize();
+  check_raw_size(*ds, path);
   if (width < 2 || height < 2) {
     throw InputError(path + ": " + std::to_string(width) + " x " + std::to_string(height) +
                      " cells; at least 2 x 2 are needed");

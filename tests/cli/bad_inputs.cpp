@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <vector>
 
 #include "test_support.hpp"
 
@@ -46,14 +47,30 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
   std::ofstream(dir / "notes.tif") << "these are not heights\n";
   add("text file", {path("notes.tif"), out}, 1, path("notes.tif") + ": not a raster GDAL can read");
   {
-    // An uncompressed GeoTIFF cut in the middle of its cells: opens, fails while reading.
+    // An uncompressed GeoTIFF cut in the middle of its cells. It has a raw layout (one strip),
+    // so its size is checked as a raw raster's when it is opened.
     const std::string cut = raster("truncated.tif", 200, 200, hill);
     fs::resize_file(cut, fs::file_size(cut) / 2);
-    add("truncated GeoTIFF (vp)", {cut, out}, 1, cut + ": read failed at rows");
-    add("truncated GeoTIFF (vp-meta)", {"--algo", "vp-meta", cut, out}, 1,
-        cut + ": read failed at rows");
-    add("truncated GeoTIFF (qslim)", {"--algo", "qslim", cut, out}, 1,
-        cut + ": read failed at rows");
+    const std::string why = cut + ": truncated: its data file " + cut + " has ";
+    add("truncated GeoTIFF (vp)", {"--algo", "vp", cut, out}, 1, why);
+    add("truncated GeoTIFF (vp-meta)", {"--algo", "vp-meta", cut, out}, 1, why);
+    add("truncated GeoTIFF (qslim)", {"--algo", "qslim", cut, out}, 1, why);
+    add("truncated GeoTIFF (qem)", {"--algo", "qem", cut, out}, 1, why);
+    // An ENVI raster (a text header and raw cells) cut short: GDAL reads zeros past its end.
+    std::ofstream(dir / "cut.hdr") << "ENVI\nsamples = 20\nlines = 15\nbands = 1\n"
+                                      "header offset = 0\ndata type = 4\ninterleave = bsq\n"
+                                      "byte order = 0\n"
+                                      "map info = {UTM, 1, 1, 400000, 3800000, 10, 10, 11, North, "
+                                      "WGS-84}\n";
+    {
+      std::ofstream raw(dir / "cut.envi", std::ios::binary);
+      const std::vector<float> cells(20 * 8, 100.0f);  // 8 of 15 rows
+      raw.write(reinterpret_cast<const char*>(cells.data()),
+                static_cast<std::streamsize>(cells.size() * sizeof(float)));
+    }
+    add("truncated ENVI raster", {path("cut.envi"), out}, 1,
+        path("cut.envi") + ": truncated: its data file " + path("cut.envi") +
+            " has 640 bytes, its cells need 1200");
   }
 
   // Too few valid cells.
