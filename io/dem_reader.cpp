@@ -5,11 +5,12 @@
 #include <cpl_error.h>
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <array>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <memory>
@@ -248,9 +249,29 @@ void check_raw_size(GDALDataset& ds, const std::string& path) {
 
 }  // namespace
 
+DemInfo::FileStamp DemInfo::stamp_of(const std::string& path) {
+  FileStamp f;
+  struct stat st {};
+  if (path.rfind("/vsi", 0) == 0 || ::stat(path.c_str(), &st) != 0) return f;
+  f.set = true;
+  f.device = static_cast<std::uint64_t>(st.st_dev);
+  f.inode = static_cast<std::uint64_t>(st.st_ino);
+  f.size = static_cast<std::int64_t>(st.st_size);
+  f.mtime_ns = static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec;
+  return f;
+}
+
+void DemInfo::check_unchanged() const {
+  if (stamp.set && !(stamp_of(path) == stamp)) {
+    throw InputError(path + ": changed while it was being read (replaced or rewritten); " +
+                     "no output written");
+  }
+}
+
 DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
   DemInfo dem;
   dem.path = path;
+  dem.stamp = DemInfo::stamp_of(path);
   std::error_code ec;
   const bool virtual_file = path.rfind("/vsi", 0) == 0;  // GDAL's /vsimem/, /vsizip/...
   if (!virtual_file && !std::filesystem::exists(path, ec)) throw InputError(path + ": no such file");
@@ -443,6 +464,7 @@ WindowReader::~WindowReader() { GDALClose(dataset_); }
 
 core::HeightGrid WindowReader::read(int col0, int row0, int width, int height,
                                     const core::Progress& progress) {
+  info_.check_unchanged();
   GDALRasterBand* band = static_cast<GDALDataset*>(dataset_)->GetRasterBand(info_.band);
   core::HeightGrid grid;
   grid.width = width;
@@ -485,6 +507,7 @@ core::HeightGrid WindowReader::read(int col0, int row0, int width, int height,
       absurd_ += row >= count_row0_ && row < count_row1_ ? 1 : 0;
     }
   }
+  info_.check_unchanged();  // also while it was read
   return grid;
 }
 

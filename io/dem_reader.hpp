@@ -54,6 +54,23 @@ struct DemInfo {
   std::unique_ptr<OGRCoordinateTransformation, TransformDeleter> to_output;    // null: identity
   std::unique_ptr<OGRCoordinateTransformation, TransformDeleter> from_output;  // null: identity
 
+  // The file as it was opened (device, inode, size, modification time; not for GDAL's /vsi
+  // paths): every window read checks that it is still the same file, so a DEM replaced or
+  // rewritten mid-run fails the run instead of mixing two DEMs in one TIN.
+  struct FileStamp {
+    bool set = false;
+    std::uint64_t device = 0, inode = 0;
+    std::int64_t size = 0, mtime_ns = 0;
+    bool operator==(const FileStamp& o) const {
+      return set == o.set && device == o.device && inode == o.inode && size == o.size &&
+             mtime_ns == o.mtime_ns;
+    }
+  };
+  FileStamp stamp;
+  static FileStamp stamp_of(const std::string& path);
+  // Throws InputError when the file is no longer the one opened.
+  void check_unchanged() const;
+
   std::size_t cell_count() const { return static_cast<std::size_t>(width) * height; }
 
   // Bytes read_dem and a whole-DEM run hold per cell of the raster (the grid, its TIN and

@@ -164,3 +164,36 @@ TEST_CASE("another band, absurd and non-finite heights", "[io][dem]") {
   CHECK(first.notes[2].find("1 cells with heights beyond +-1e7 read as no-data") !=
         std::string::npos);
 }
+
+TEST_CASE("a DEM replaced or rewritten after it was opened fails the next window read",
+          "[io][dem][robust]") {
+  // The piece engines read windows through handles of their own: a file replaced mid-run
+  // would otherwise mix two DEMs in one TIN.
+  GDALAllRegister();
+  test::TempDir dir;
+  const auto path = (dir / "dem.tif").string(), other = (dir / "other.tif").string();
+  auto grid = [](double base) {
+    return test::make_grid(12, 10, [base](int c, int r) { return base + c + 2.0 * r; });
+  };
+  const double gt[6] = {400000, 10, 0, 3800000, 0, -10};
+  test::write_geotiff(path, grid(100), {gt[0], gt[1], gt[2], gt[3], gt[4], gt[5]}, epsg_wkt(32611));
+  for (const bool rename : {true, false}) {
+    INFO((rename ? "replaced by a rename" : "rewritten in place"));
+    const io::DemInfo dem = io::open_dem(path, {});
+    CHECK(io::WindowReader(dem).read(0, 0, 12, 10).z[0] == (rename ? 100.0 : 500.0));
+    if (rename) {
+      test::write_geotiff(other, grid(500), {gt[0], gt[1], gt[2], gt[3], gt[4], gt[5]},
+                          epsg_wkt(32611));
+      std::filesystem::rename(other, path);
+    } else {
+      std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+      f.seekp(0, std::ios::end);
+      f << "x";  // grows: another size (and time)
+    }
+    io::WindowReader reader(dem);
+    CHECK_THROWS_WITH(reader.read(0, 0, 12, 10),
+                      path +
+                          ": changed while it was being read (replaced or rewritten); no "
+                          "output written");
+  }
+}
