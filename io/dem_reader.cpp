@@ -43,7 +43,9 @@ std::string crs_name(const OGRSpatialReference& srs) {
 
 // The UTM zone CRS (same datum) for a geographic CRS at (lon, lat).
 OGRSpatialReference utm_for(const OGRSpatialReference& geographic, double lon, double lat) {
-  const int zone = std::clamp(static_cast<int>(std::floor((lon + 180.0) / 6.0)) + 1, 1, 60);
+  // Longitudes may run 0-360 (or beyond): the zone of the same meridian in -180..180.
+  const double east = std::fmod(std::fmod(lon + 180.0, 360.0) + 360.0, 360.0);
+  const int zone = std::clamp(static_cast<int>(std::floor(east / 6.0)) + 1, 1, 60);
   const bool north = lat >= 0;
   OGRSpatialReference utm;
   const char* code = geographic.GetAuthorityCode(nullptr);
@@ -222,6 +224,20 @@ std::function<bool(std::uint32_t, std::uint32_t)> DemInfo::outline_chord_test(
 
 namespace {
 
+// Metres per unit of a band's height unit ("m", "metre", "ft", "US survey foot"...); 1 when
+// it is metres, empty or not a unit of length GDAL names.
+double height_unit_metres(std::string unit) {
+  std::transform(unit.begin(), unit.end(), unit.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (unit == "ft" || unit == "foot" || unit == "feet" || unit == "international foot") {
+    return 0.3048;
+  }
+  if (unit == "us survey foot" || unit == "us-ft" || unit == "ftus" || unit == "us_survey_foot") {
+    return 1200.0 / 3937.0;
+  }
+  return 1.0;
+}
+
 // A raw raster (ENVI, EHdr and the like: a header and a plain data file) cut short reads as
 // zeros beyond its end, without an error from GDAL: its data file must hold every cell.
 void check_raw_size(GDALDataset& ds, const std::string& path) {
@@ -340,6 +356,10 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
   const char* wkt = ds->GetProjectionRef();
   const bool has_crs = wkt && *wkt && src.importFromWkt(wkt) == OGRERR_NONE;
   src.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  if (has_crs && src.IsGeocentric()) {
+    throw InputError(path + ": has a geocentric CRS (" + crs_name(src) +
+                     "); a DEM needs a geographic or projected one");
+  }
   OGRSpatialReference dst;
   bool transform = false;
   if (!options.t_srs.empty()) {
@@ -442,6 +462,14 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
     std::snprintf(note, sizeof note, "%s: heights = stored value x %.9g + %.9g (band scale/offset)",
                   path.c_str(), dem.scale, dem.offset);
     dem.notes.push_back(note);
+  }
+  // Heights in feet (the band's unit type) become metres, as the output's heights are.
+  const double foot_m = height_unit_metres(band->GetUnitType() ? band->GetUnitType() : "");
+  if (foot_m != 1.0) {
+    dem.scale *= foot_m;
+    dem.offset *= foot_m;
+    dem.notes.push_back(path + ": heights in " + band->GetUnitType() +
+                        " (the band's unit), converted to metres");
   }
   band->GetBlockSize(&dem.block_width, &dem.block_height);
   dem.block_width = std::max(1, dem.block_width);

@@ -197,3 +197,46 @@ TEST_CASE("a DEM replaced or rewritten after it was opened fails the next window
                           "output written");
   }
 }
+
+TEST_CASE("longitudes 0-360 get the UTM zone of their meridian", "[io][dem][robust]") {
+  GDALAllRegister();
+  test::TempDir dir;
+  const auto g = test::make_grid(10, 10, [](int c, int r) { return c + r; });
+  // 200.5E = 159.5W at 20N (Hawaii): UTM zone 4N, not 60 (the zone clamped from 200.5).
+  const double d = 1.0 / 1200;
+  test::write_geotiff(dir / "geo.tif", g, {200.5, d, 0, 20.0, 0, -d}, epsg_wkt(4326));
+  const io::Dem dem = io::read_dem((dir / "geo.tif").string(), {}, nullptr);
+  CHECK(dem.output_crs_name.find("32604") != std::string::npos);
+  const auto xy = dem.output_xy({0});
+  CHECK(xy[0] == Approx(448000).margin(3000));  // 0.5 degrees west of 159W at 20N: ~52 km
+}
+
+TEST_CASE("a geocentric CRS is refused, and heights in feet become metres", "[io][dem][robust]") {
+  GDALAllRegister();
+  test::TempDir dir;
+  const auto g = test::make_grid(10, 10, [](int c, int r) { return 100.0 + c + r; });
+  const auto tif = (dir / "dem.tif").string();
+  test::write_geotiff(tif, g, {400000, 10, 0, 3800000, 0, -10}, epsg_wkt(32611));
+  // The same cells labelled with the geocentric WGS 84 (EPSG:4978), through a VRT.
+  std::ofstream(dir / "ecef.vrt")
+      << "<VRTDataset rasterXSize=\"10\" rasterYSize=\"10\"><SRS>EPSG:4978</SRS><GeoTransform>"
+         "400000, 10, 0, 3800000, 0, -10</GeoTransform><VRTRasterBand dataType=\"Float32\" "
+         "band=\"1\"><SimpleSource><SourceFilename relativeToVRT=\"1\">dem.tif</SourceFilename>"
+         "<SourceBand>1</SourceBand></SimpleSource></VRTRasterBand></VRTDataset>\n";
+  const auto ecef = (dir / "ecef.vrt").string();
+  CHECK_THROWS_WITH(io::open_dem(ecef, {}), Catch::StartsWith(ecef + ": has a geocentric CRS ("));
+  // Heights in feet (the band's unit type).
+  std::ofstream(dir / "feet.vrt")
+      << "<VRTDataset rasterXSize=\"10\" rasterYSize=\"10\"><GeoTransform>400000, 10, 0, "
+         "3800000, 0, -10</GeoTransform><VRTRasterBand dataType=\"Float32\" band=\"1\">"
+         "<UnitType>ft</UnitType><SimpleSource><SourceFilename relativeToVRT=\"1\">dem.tif"
+         "</SourceFilename><SourceBand>1</SourceBand></SimpleSource></VRTRasterBand>"
+         "</VRTDataset>\n";
+  const auto feet = (dir / "feet.vrt").string();
+  const io::Dem dem = io::read_dem(feet, {}, nullptr);
+  CHECK(dem.grid.z[0] == Approx(100.0 * 0.3048).epsilon(1e-12));
+  CHECK(dem.grid.z[11] == Approx(102.0 * 0.3048).epsilon(1e-12));
+  bool said = false;
+  for (const auto& n : dem.notes) said = said || n.find("heights in ft") != std::string::npos;
+  CHECK(said);
+}
