@@ -513,6 +513,20 @@ core::HeightGrid WindowReader::read(int col0, int row0, int width, int height,
                        std::to_string(next - 1) + ", truncated or damaged? (" + last_gdal_error() +
                        ")");
     }
+    // A mask of its own (an alpha band, a .msk, an internal mask; not one derived from the
+    // no-data value, handled below): cells it masks out are no-data too.
+    const int mask_flags = band->GetMaskFlags();
+    if (!(mask_flags & GMF_ALL_VALID) && !(mask_flags & GMF_NODATA)) {
+      std::vector<GByte> mask(static_cast<std::size_t>(width) * rows);
+      if (band->GetMaskBand()->RasterIO(GF_Read, col0, r, width, rows, mask.data(), width, rows,
+                                        GDT_Byte, 0, 0, nullptr) != CE_None) {
+        throw InputError(info_.path + ": read failed at rows " + std::to_string(r) + "-" +
+                         std::to_string(next - 1) + " of its mask (" + last_gdal_error() + ")");
+      }
+      for (std::size_t i = 0; i < mask.size(); ++i) {
+        if (mask[i] == 0) dst[i] = std::numeric_limits<double>::quiet_NaN();
+      }
+    }
     r = next;
     if (progress && !progress(static_cast<double>(r - row0) / height, "read")) throw Cancelled();
   }

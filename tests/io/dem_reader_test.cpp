@@ -240,3 +240,48 @@ TEST_CASE("a geocentric CRS is refused, and heights in feet become metres", "[io
   for (const auto& n : dem.notes) said = said || n.find("heights in ft") != std::string::npos;
   CHECK(said);
 }
+
+TEST_CASE("cells masked out by a mask or alpha band are no-data", "[io][dem][robust]") {
+  GDALAllRegister();
+  test::TempDir dir;
+  const auto g = test::make_grid(12, 10, [](int c, int r) { return 100.0 + c + r; });
+  // The masked-out cells: columns 3-5 of rows 2-4.
+  auto masked = [](int c, int r) { return c >= 3 && c <= 5 && r >= 2 && r <= 4; };
+  std::vector<GByte> mask(12 * 10);
+  for (int r = 0; r < 10; ++r) {
+    for (int c = 0; c < 12; ++c) mask[r * 12 + c] = masked(c, r) ? 0 : 255;
+  }
+  const auto with_mask = (dir / "mask.tif").string();
+  test::write_geotiff(with_mask, g, {400000, 10, 0, 3800000, 0, -10}, epsg_wkt(32611));
+  {
+    std::unique_ptr<GDALDataset> ds(GDALDataset::Open(with_mask.c_str(), GDAL_OF_UPDATE));
+    REQUIRE(ds);
+    REQUIRE(ds->CreateMaskBand(GMF_PER_DATASET) == CE_None);
+    REQUIRE(ds->GetRasterBand(1)->GetMaskBand()->RasterIO(GF_Write, 0, 0, 12, 10, mask.data(), 12,
+                                                          10, GDT_Byte, 0, 0, nullptr) == CE_None);
+  }
+  // Heights in band 1, an alpha band 2 (GDAL takes alpha as the mask for Byte and UInt16).
+  const auto alpha_tif = (dir / "alpha.tif").string();
+  {
+    GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
+    std::unique_ptr<GDALDataset> ds(
+        gtiff->Create(alpha_tif.c_str(), 12, 10, 2, GDT_UInt16, nullptr));
+    REQUIRE(ds);
+    double gt[6] = {400000, 10, 0, 3800000, 0, -10};
+    ds->SetGeoTransform(gt);
+    std::vector<std::uint16_t> z(g.z.begin(), g.z.end()), a(mask.begin(), mask.end());
+    REQUIRE(ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, 12, 10, z.data(), 12, 10, GDT_UInt16, 0,
+                                           0, nullptr) == CE_None);
+    REQUIRE(ds->GetRasterBand(2)->RasterIO(GF_Write, 0, 0, 12, 10, a.data(), 12, 10, GDT_UInt16, 0,
+                                           0, nullptr) == CE_None);
+    ds->GetRasterBand(2)->SetColorInterpretation(GCI_AlphaBand);
+  }
+  for (const auto& path : {with_mask, alpha_tif}) {
+    INFO(path);
+    const io::Dem dem = io::read_dem(path, {}, nullptr);
+    for (int r = 0; r < 10; ++r) {
+      for (int c = 0; c < 12; ++c) CHECK(dem.grid.is_valid(c, r) == !masked(c, r));
+    }
+    CHECK(dem.valid_cells == 120 - 9);
+  }
+}
