@@ -179,7 +179,9 @@ int run_qslim(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printe
   const std::size_t input = grid.vertex_count();
   const std::size_t target = par::target_count(o.keep, input);
   core::QslimStats stats;
-  core::TriMesh result = core::qslim(grid, target, &stats);
+  core::TriMesh result = core::qslim(grid, target, &stats, [&](double f, std::string_view) {
+    return progress(f, o.algo_text.c_str());
+  });
   if (!progress(1.0, o.algo_text.c_str())) throw Cancelled();
   printer.finish();
   warn_kept(stats.kept_vertices, target);

@@ -17,8 +17,11 @@
 
 #include <CGAL/Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Spatial_sort_traits_adapter_2.h>
 #include <CGAL/Triangulation_face_base_with_info_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
+#include <CGAL/property_map.h>
+#include <CGAL/spatial_sort.h>
 
 #include <algorithm>
 #include <cassert>
@@ -310,25 +313,49 @@ struct Eliminator::Impl {
 };
 
 Eliminator::Eliminator(const HeightGrid& grid, const GridFrame& frame,
-                       const EliminationOptions& options)
+                       const EliminationOptions& options, const Progress& progress)
     : impl_(std::make_unique<Impl>(grid, frame, options)) {
   Impl& m = *impl_;
   m.cells = surface_cells(grid);
   if (m.cells.size() < 3) {
     throw std::invalid_argument(kNothingToTriangulate);
   }
-  std::vector<std::pair<Point, VertexInfo>> points;
+  std::vector<Point> points;
+  std::vector<VertexInfo> infos;
   points.reserve(m.cells.size());
+  infos.reserve(m.cells.size());
   for (std::uint32_t id = 0; id < m.cells.size(); ++id) {
     VertexInfo info;
     info.id = id;
     info.col = static_cast<std::int32_t>(m.cells[id] % grid.width);
     info.row = static_cast<std::int32_t>(m.cells[id] / grid.width);
     info.z = grid.z[m.cells[id]];
-    points.emplace_back(Point(frame.u(info.col, info.row), frame.w(info.col, info.row)), info);
+    points.emplace_back(frame.u(info.col, info.row), frame.w(info.col, info.row));
+    infos.push_back(info);
   }
-  m.dt.insert(points.begin(), points.end());
+  // CGAL's range insertion with info (Delaunay_triangulation_2::insert_with_info), written
+  // out so that progress can stop it: the same spatial sort and hinted insertions, so the
+  // same triangulation (on a grid, cocircular points make it depend on the order).
+  std::vector<std::size_t> order(points.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  using Traits = CGAL::Spatial_sort_traits_adapter_2<K, CGAL::Pointer_property_map<Point>::type>;
+  CGAL::spatial_sort(order.begin(), order.end(),
+                     Traits(CGAL::make_property_map(points), m.dt.geom_traits()));
+  Delaunay::Face_handle hint;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    if (k % 65536 == 65535 && progress &&
+        !progress(static_cast<double>(k) / static_cast<double>(order.size()), "triangulate")) {
+      throw Cancelled();
+    }
+    const VertexHandle v = m.dt.insert(points[order[k]], hint);
+    if (v != VertexHandle()) {
+      v->info() = infos[order[k]];
+      hint = v->face();
+    }
+  }
   points = {};
+  infos = {};
+  order = {};
   if (m.dt.dimension() < 2) throw std::invalid_argument("all valid cells are collinear");
   m.handle.assign(m.cells.size(), VertexHandle());
   for (auto v = m.dt.finite_vertices_begin(); v != m.dt.finite_vertices_end(); ++v) {

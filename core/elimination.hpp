@@ -77,8 +77,10 @@ using Progress = std::function<bool(double fraction, std::string_view stage)>;
 class Eliminator {
  public:
   // Builds the Delaunay triangulation of the DEM's surface vertices (see footprint.hpp).
-  // Throws std::invalid_argument when the DEM has no footprint triangle.
-  Eliminator(const HeightGrid& grid, const GridFrame& frame, const EliminationOptions& options);
+  // Throws std::invalid_argument when the DEM has no footprint triangle. progress (stage
+  // "triangulate") is asked every 65536 insertions; false stops it with Cancelled.
+  Eliminator(const HeightGrid& grid, const GridFrame& frame, const EliminationOptions& options,
+             const Progress& progress = nullptr);
   ~Eliminator();
   Eliminator(const Eliminator&) = delete;
   Eliminator& operator=(const Eliminator&) = delete;

@@ -3,12 +3,16 @@
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/Surface_mesh_simplification/Edge_collapse_visitor_base.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Constrained_placement.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/GarlandHeckbert_plane_policies.h>
 #include <CGAL/Surface_mesh_simplification/edge_collapse.h>
 
+#include <algorithm>
 #include <stdexcept>
 #include <vector>
+
+#include "core/errors.hpp"
 
 namespace dpts::core {
 namespace {
@@ -29,6 +33,19 @@ struct BorderMap {
   friend bool get(const BorderMap& m, key_type e) { return m.mesh->is_border(e); }
 };
 
+// Asks progress every 4096 calls (edges collected and popped alike): false throws
+// Cancelled out of CGAL's collapse, whose mesh is then dropped.
+struct Ticker {
+  const Progress* progress = nullptr;
+  std::size_t start = 0, keep = 0, calls = 0;
+  void tick(std::size_t vertices) {
+    if (++calls % 4096 != 0 || !progress || !*progress) return;
+    const double done =
+        start > keep ? static_cast<double>(start - std::max(vertices, keep)) / (start - keep) : 1;
+    if (!(*progress)(done, "simplify")) throw Cancelled();
+  }
+};
+
 // Stops at an exact vertex count.
 struct VertexCountStop {
   const Mesh* mesh;
@@ -36,6 +53,23 @@ struct VertexCountStop {
   template <typename F, typename Profile>
   bool operator()(const F&, const Profile&, std::size_t, std::size_t) const {
     return mesh->number_of_vertices() <= keep;
+  }
+};
+
+// Ticks as the queue is collected (its costs take seconds on large meshes) and as edges are
+// popped. (Not a wrapper of the cost: CGAL then no longer gives the Garland-Heckbert cost its
+// quadric updates.)
+struct TickingVisitor : SMS::Edge_collapse_visitor_base<Mesh> {
+  const Mesh* mesh;
+  Ticker* ticker;
+  TickingVisitor(const Mesh* m, Ticker* t) : mesh(m), ticker(t) {}
+  template <typename Profile, typename Cost>
+  void OnCollected(const Profile&, const Cost&) {
+    ticker->tick(mesh->number_of_vertices());
+  }
+  template <typename Profile, typename Cost>
+  void OnSelected(const Profile&, const Cost&, std::size_t, std::size_t) {
+    ticker->tick(mesh->number_of_vertices());
   }
 };
 
@@ -76,7 +110,7 @@ struct NoFoldFilter {
 
 }  // namespace
 
-TriMesh qslim(const TriMesh& in, std::size_t keep, QslimStats* stats) {
+TriMesh qslim(const TriMesh& in, std::size_t keep, QslimStats* stats, const Progress& progress) {
   Mesh mesh;
   std::vector<VertexIndex> vi;
   vi.reserve(in.vertex_count());
@@ -96,8 +130,10 @@ TriMesh qslim(const TriMesh& in, std::size_t keep, QslimStats* stats) {
   const BorderMap border{&mesh};
   const SMS::Constrained_placement<Policies::Get_placement, BorderMap> placement(
       border, policies.get_placement());
+  Ticker ticker{&progress, st.input_vertices, keep};
   SMS::edge_collapse(mesh, VertexCountStop{&mesh, keep},
                      CGAL::parameters::get_cost(policies.get_cost())
+                         .visitor(TickingVisitor(&mesh, &ticker))
                          .get_placement(placement)
                          .edge_is_constrained_map(border)
                          .filter(NoFoldFilter{&mesh, &st.rejected_folds}));

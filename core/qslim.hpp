@@ -13,6 +13,7 @@
 
 #include <cstddef>
 
+#include "core/elimination.hpp"
 #include "core/steiner_graph.hpp"
 
 namespace dpts::core {
@@ -28,6 +29,10 @@ struct QslimStats {
 
 // Simplifies a triangle mesh (counter-clockwise faces seen from above, in metres) to `keep`
 // vertices, or as few as the locked border and the fold rule allow. Returns the new mesh.
-TriMesh qslim(const TriMesh& mesh, std::size_t keep, QslimStats* stats = nullptr);
+// progress (stage "simplify") is asked every few thousand cost computations and collapses,
+// from the first (the queue's costs take seconds on large meshes); false stops it with
+// Cancelled.
+TriMesh qslim(const TriMesh& mesh, std::size_t keep, QslimStats* stats = nullptr,
+              const Progress& progress = nullptr);
 
 }  // namespace dpts::core

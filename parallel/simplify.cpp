@@ -5,8 +5,10 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <mutex>
 
 #include "core/errors.hpp"
 
@@ -35,7 +37,7 @@ core::Tin simplify_dem(const core::HeightGrid& grid, const core::GridFrame& fram
   SimplifyStats& st = stats ? *stats : local;
   auto t0 = std::chrono::steady_clock::now();
   if (progress && !progress(0.0, "triangulate")) throw Cancelled();
-  core::Eliminator elim(grid, frame, options);
+  core::Eliminator elim(grid, frame, options, progress);
   st.input_vertices = elim.vertex_count();
   st.target_vertices = target_count(target, st.input_vertices);
   st.triangulate_s = seconds_since(t0);
@@ -44,10 +46,24 @@ core::Tin simplify_dem(const core::HeightGrid& grid, const core::GridFrame& fram
   // parallel, each task writing its own vertices' slots.
   t0 = std::chrono::steady_clock::now();
   if (progress && !progress(0.0, "importance")) throw Cancelled();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, elim.vertex_count(), 2048),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      elim.compute_importance(r.begin(), r.end());
-                    });
+  {
+    // Progress after each block, serialized; a refusal skips the blocks left.
+    std::mutex lock;
+    std::size_t done = 0;
+    std::atomic<bool> stop{false};
+    const double n = static_cast<double>(elim.vertex_count());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, elim.vertex_count(), 2048),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        if (stop) return;
+                        elim.compute_importance(r.begin(), r.end());
+                        std::lock_guard<std::mutex> hold(lock);
+                        done += r.size();
+                        if (progress && !progress(static_cast<double>(done) / n, "importance")) {
+                          stop = true;
+                        }
+                      });
+    if (stop) throw Cancelled();
+  }
   st.importance_s = seconds_since(t0);
 
   t0 = std::chrono::steady_clock::now();

@@ -379,14 +379,20 @@ TEST_CASE(
                       {400000, 10, 0, 3800000, 0, -10}, test::epsg_wkt(32611));
   const auto out = (dir / "out.ply").string();
   std::ofstream(out) << "precious";  // an older result: must survive the interrupted run
-  for (const auto& [algo, sig] : {std::pair<std::string, int>{"vp", SIGTERM},
-                                  {"vp-meta", SIGTERM},
-                                  {"vp", SIGINT},
-                                  {"qem", SIGTERM},
-                                  {"qem", SIGHUP}}) {
-    INFO(algo << ", signal " << sig);
+  struct Case {
+    std::string algo;
+    int signal;
+    std::string stage;  // sent when progress shows it (once the run has lasted a second)
+  };
+  for (const Case& c : {Case{"vp", SIGTERM, "simplify"}, Case{"vp-meta", SIGTERM, "simplify"},
+                        Case{"vp", SIGINT, "simplify"}, Case{"vp", SIGTERM, "importance"},
+                        Case{"qem", SIGTERM, "simplify"}, Case{"qem", SIGHUP, "simplify"},
+                        Case{"qslim", SIGTERM, "qslim"}}) {
+    const std::string& algo = c.algo;
+    const int sig = c.signal;
+    INFO(algo << ", signal " << sig << " in " << c.stage);
     test::RunOptions ro;
-    ro.signal_when = "simplify";  // progress shows once the run has lasted a second
+    ro.signal_when = c.stage;
     ro.signal_after_s = 30;
     ro.signal = sig;
     const auto r = test::run(kExe, {"--algo", algo, "--threads", "2", dem, out}, ro);
