@@ -434,6 +434,14 @@ int main(int argc, char** argv) {
   } catch (const dpts::Cancelled&) {
     std::cerr << "\ndpts-par: interrupted; no output written\n";
     return report("interrupted", 1, "interrupted by a signal; no output written");
+  } catch (const std::bad_alloc&) {
+    // note: the message is built from what is at hand; the memory asked for is not known.
+    const std::string why =
+        "out of memory in stage " + g_report.clock.stage() + " (peak " +
+        std::to_string(dpts::par::peak_rss_kb() >> 10) +
+        " MB); lower --tile-mb or --threads, or set --max-memory to be refused up front";
+    std::cerr << "dpts-par: error: " << why << "\n";
+    return report("failed", 1, why);
   } catch (const std::exception& e) {
     std::cerr << "dpts-par: error: " << e.what() << "\n";
     return report("failed", 1, e.what());

@@ -27,6 +27,11 @@ double StageClock::wall_s() const {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
 }
 
+std::string StageClock::stage() const {
+  std::lock_guard<std::mutex> hold(lock_);
+  return marks_.empty() ? std::string() : marks_.back().stage;
+}
+
 double StageClock::cpu_s() const { return process_cpu_s(); }
 
 void StageClock::enter(std::string_view stage) {

@@ -24,6 +24,7 @@ class StageClock {
   std::string json() const;            // [{"stage":..,"wall_s":..,"cpu_s":..}, ...]
   double wall_s() const;
   double cpu_s() const;
+  std::string stage() const;  // the stage entered last ("" before any)
 
  private:
   struct Mark {

@@ -56,6 +56,7 @@ struct RunOptions {
   std::string stdout_to;            // a file stdout goes to (e.g. /dev/full), not captured
   std::string cwd;                  // the child's working folder (empty: ours)
   bool close_stderr = false;        // start the child with descriptor 2 closed (2>&-)
+  std::size_t address_space_limit = 0;  // RLIMIT_AS in bytes (0: none)
 };
 
 // Runs an executable with arguments (no shell), capturing stdout and stderr.

@@ -241,6 +241,31 @@ TEST_CASE("with stderr closed the output is the same bytes (no progress text in 
   CHECK(bytes(a) == bytes(b));
 }
 
+#if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)  // they reserve terabytes
+TEST_CASE("out of memory is one line naming the stage, and no output", "[cli][robust]") {
+  test::TempDir dir;
+  const auto dem = (dir / "big.tif").string();
+  test::write_geotiff(
+      dem,
+      test::make_grid(1200, 1200,
+                      [](int c, int r) {
+                        return 500.0 + 40.0 * std::sin(c * 0.05) * std::cos(r * 0.07) + 0.1 * r;
+                      }),
+      {400000, 10, 0, 3800000, 0, -10}, test::epsg_wkt(32611));
+  test::RunOptions small;
+  small.address_space_limit = std::size_t{250} << 20;  // vp needs about 460 MB here
+  // --max-memory above the limit: the estimate lets it start, the allocation fails.
+  const auto r = test::run(kExe,
+                           {"--quiet", "--algo", "vp", "--max-memory", "100000", "--threads", "1",
+                            dem, (dir / "out.ply").string()},
+                           small);
+  CHECK(r.exit_code == 1);
+  CHECK(r.err.rfind("dpts-par: error: out of memory in stage ", 0) == 0);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  CHECK(dir.files() == std::vector<std::string>{"big.tif"});
+}
+#endif
+
 TEST_CASE("help and version that cannot be written exit 1", "[cli][robust]") {
   test::RunOptions full;
   full.stdout_to = "/dev/full";
