@@ -1,10 +1,11 @@
 // Batch runs (see batch.hpp): child processes, resume by report, one summary.
 #include "apps/batch.hpp"
 
-#include <gdal_priv.h>
-#include <tbb/info.h>
 #include <fcntl.h>
+#include <gdal_priv.h>
+#include <sys/file.h>
 #include <sys/wait.h>
+#include <tbb/info.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -25,6 +26,8 @@
 namespace dpts::cli {
 namespace fs = std::filesystem;
 namespace {
+
+constexpr const char* kBatchLockName = ".dpts-batch.lock";
 
 bool is_raster_name(const fs::path& p) {
   static const std::set<std::string> raster = {
@@ -149,6 +152,18 @@ int run_batch(const ParOptions& o, const std::string& self, const std::atomic<in
   fs::create_directories(o.out_dir, ec);
   if (!fs::is_directory(o.out_dir, ec)) {
     throw IoError(o.out_dir + ": cannot create the output folder");
+  }
+  // One batch at a time in a folder: a second would redo and overwrite the first's work and
+  // summary. The lock goes with the process (also when it is killed).
+  const std::string lock_path = (fs::path(o.out_dir) / kBatchLockName).string();
+  const int lock = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (lock < 0) throw IoError(lock_path + ": cannot create the batch lock");
+  struct LockCloser {
+    int fd;
+    ~LockCloser() { ::close(fd); }
+  } lock_closer{lock};
+  if (::flock(lock, LOCK_EX | LOCK_NB) != 0) {
+    throw IoError(o.out_dir + ": another dpts-par batch is writing into it");
   }
   // One output and one report per input, named after it; two inputs may not share a name.
   std::vector<Job> jobs;

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -289,7 +290,13 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
   dem.path = path;
   dem.stamp = DemInfo::stamp_of(path);
   std::error_code ec;
-  const bool virtual_file = path.rfind("/vsi", 0) == 0;  // GDAL's /vsimem/, /vsizip/...
+  // GDAL's /vsimem/, /vsizip/... and names with a driver prefix (subdatasets and connection
+  // strings: GTIFF_DIR:1:f.tif, NETCDF:"f.nc":var, HDF5:...) are not plain files.
+  const std::size_t colon = path.find(':');
+  const bool prefixed = colon != std::string::npos && colon > 1 &&
+                        std::all_of(path.begin(), path.begin() + static_cast<long>(colon),
+                                    [](unsigned char c) { return std::isalnum(c) || c == '_'; });
+  const bool virtual_file = path.rfind("/vsi", 0) == 0 || prefixed;
   if (!virtual_file && !std::filesystem::exists(path, ec)) throw InputError(path + ": no such file");
   if (!virtual_file && std::filesystem::is_directory(path, ec))
     throw InputError(path + ": is a directory, not a raster");

@@ -1,4 +1,8 @@
 // dpts-par --report and --batch: machine-readable reports, resumable batches.
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <csignal>
@@ -164,6 +168,29 @@ TEST_CASE("a batch folder's tables and vector files are not inputs", "[cli][batc
   CHECK(field(summary, "inputs") == "2");
   CHECK(field(summary, "ok") == "2");
   CHECK(field(summary, "failed") == "0");
+}
+
+TEST_CASE("two batches into one folder: the second is refused while the first runs",
+          "[cli][batch][robust]") {
+  test::TempDir dir;
+  make_folder(dir / "in", 12, 1);
+  fs::remove(dir / "in" / "broken.tif");
+  const auto out = dir / "out";
+  fs::create_directories(out);
+  // The first batch's lock, held here.
+  const int fd = ::open((out / ".dpts-batch.lock").c_str(), O_RDWR | O_CREAT, 0644);
+  REQUIRE(fd >= 0);
+  REQUIRE(::flock(fd, LOCK_EX | LOCK_NB) == 0);
+  const std::vector<std::string> args = {"--batch", (dir / "in").string(), "--out-dir",
+                                         out.string(), "--quiet"};
+  const auto second = test::run(kExe, args);
+  CHECK(second.exit_code == 1);
+  CHECK(second.err ==
+        "dpts-par: error: " + out.string() + ": another dpts-par batch is writing into it\n");
+  CHECK(!fs::exists(out / "dem0.ply"));
+  ::close(fd);  // the first is done
+  CHECK(test::run(kExe, args).exit_code == 0);
+  CHECK(fs::exists(out / "dem0.ply"));
 }
 
 TEST_CASE("batch usage errors exit 2", "[cli][batch]") {

@@ -285,3 +285,18 @@ TEST_CASE("cells masked out by a mask or alpha band are no-data", "[io][dem][rob
     CHECK(dem.valid_cells == 120 - 9);
   }
 }
+
+TEST_CASE("a subdataset name with a driver prefix opens", "[io][dem][robust]") {
+  // GTIFF_DIR:1:f.tif (the first image of a GeoTIFF) was refused as "no such file".
+  GDALAllRegister();
+  test::TempDir dir;
+  const auto path = (dir / "dem.tif").string();
+  test::write_geotiff(path, test::make_grid(12, 10, [](int c, int r) { return 1.0 * c + r; }),
+                      {400000, 10, 0, 3800000, 0, -10}, epsg_wkt(32611));
+  const io::Dem dem = io::read_dem("GTIFF_DIR:1:" + path, {}, nullptr);
+  CHECK(dem.width == 12);
+  CHECK(dem.grid.z[13] == 2.0);
+  CHECK_THROWS_WITH(io::open_dem("GTIFF_DIR:1:" + (dir / "none.tif").string(), {}),
+                    Catch::StartsWith("GTIFF_DIR:1:" + (dir / "none.tif").string() +
+                                      ": not a raster GDAL can read"));
+}
