@@ -398,10 +398,13 @@ TEST_CASE(
     "[cli][robust]") {
   test::TempDir dir;
   const auto dem = (dir / "big.tif").string();
-  test::write_geotiff(dem, test::make_grid(900, 900, [](int c, int r) {
+  test::write_geotiff(
+      dem,
+      test::make_grid(1300, 1300,
+                      [](int c, int r) {
                         return 500.0 + 40.0 * std::sin(c * 0.05) * std::cos(r * 0.07) + 0.1 * r;
                       }),
-                      {400000, 10, 0, 3800000, 0, -10}, test::epsg_wkt(32611));
+      {400000, 10, 0, 3800000, 0, -10}, test::epsg_wkt(32611));
   const auto out = (dir / "out.ply").string();
   std::ofstream(out) << "precious";  // an older result: must survive the interrupted run
   struct Case {
