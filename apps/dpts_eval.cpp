@@ -259,6 +259,13 @@ int run(const Options& o) {
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
                                   static_cast<std::size_t>(threads));
   const io::Dem dem = io::read_dem(o.dem, io::DemReadOptions{o.t_srs}, nullptr);
+  // Nor may --pairs-out overwrite any file of the DEM's dataset (an ENVI .hdr, a VRT's
+  // source, the zip behind /vsizip/).
+  for (const std::string& f : dem.files) {
+    if (!o.pairs_out.empty() && dpts::cli::same_file(o.pairs_out, f)) {
+      throw UsageError("--pairs-out " + o.pairs_out + ": is " + f + ", a file of the DEM");
+    }
+  }
 
   // T: the DEM's full-resolution grid TIN, in the output CRS dpts-par uses.
   const core::TriMesh t = dem.grid_mesh();

@@ -44,12 +44,34 @@ dpts::io::DemReadOptions read_options(const dpts::cli::ParOptions& o) {
   return r;
 }
 
+dpts::cli::RunReport g_report;  // --report: filled as the run goes, written by main()
+
+// Opens the input DEM. An OUTPUT or --report that is one of its dataset's files (an ENVI
+// .hdr, a VRT's source raster, the zip behind /vsizip/) is refused like OUTPUT == INPUT:
+// writing it would destroy the input.
+dpts::io::DemInfo open_input(const dpts::cli::ParOptions& o) {
+  using namespace dpts;
+  io::DemInfo dem = io::open_dem(o.input, read_options(o));
+  for (const std::string& f : dem.files) {
+    if (cli::same_file(o.output, f)) {
+      throw UsageError(o.output + ": OUTPUT is " + f +
+                       ", a file of the INPUT dataset; refusing to overwrite it");
+    }
+    if (!o.report.empty() && cli::same_file(o.report, f)) {
+      g_report.path.clear();  // nor is the failure written there
+      throw UsageError(o.report + ": --report names " + f +
+                       ", a file of the INPUT dataset; refusing to overwrite it");
+    }
+  }
+  return dem;
+}
+
 // Opens the DEM and reads it whole, refusing first (with the estimate) a DEM whose whole-DEM
 // run would not fit in memory.
 dpts::io::Dem read_whole_dem(const dpts::cli::ParOptions& o, std::size_t bytes_per_cell,
                              const dpts::core::Progress& progress) {
   using namespace dpts;
-  io::DemInfo info = io::open_dem(o.input, read_options(o));
+  io::DemInfo info = open_input(o);
   const double need = static_cast<double>(info.cell_count()) * bytes_per_cell;
   const std::size_t limit = cli::memory_limit_bytes(o);
   if (need > static_cast<double>(limit)) {
@@ -61,8 +83,6 @@ dpts::io::Dem read_whole_dem(const dpts::cli::ParOptions& o, std::size_t bytes_p
   }
   return io::read_dem(std::move(info), progress);
 }
-
-dpts::cli::RunReport g_report;  // --report: filled as the run goes, written by main()
 
 // Records the output in the report (after it was committed).
 void record_output(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem,
@@ -275,7 +295,7 @@ std::size_t piece_cache(const dpts::cli::ParOptions& o) {
 int run_qem(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer,
             const dpts::core::Progress& progress, std::chrono::steady_clock::time_point start) {
   using namespace dpts;
-  io::DemInfo dem = io::open_dem(o.input, read_options(o));
+  io::DemInfo dem = open_input(o);
   print_notes(dem, o);
   io::AtomicOutputFile out(o.output);
   par::QemEngineOptions qo;
@@ -296,7 +316,7 @@ int run_qem(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer,
 int run_meta(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer,
              const dpts::core::Progress& progress, std::chrono::steady_clock::time_point start) {
   using namespace dpts;
-  io::DemInfo dem = io::open_dem(o.input, read_options(o));
+  io::DemInfo dem = open_input(o);
   print_notes(dem, o);
   io::AtomicOutputFile out(o.output);
   const std::size_t tile_bytes = piece_cache(o);

@@ -3,6 +3,7 @@
 
 #include <cpl_conv.h>
 #include <cpl_error.h>
+#include <dlfcn.h>
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
 #include <sys/stat.h>
@@ -16,9 +17,12 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <string>
+#include <vector>
 
 #include "core/errors.hpp"
 #include "core/surface_sampling.hpp"
+#include "io/netcdf_classic.hpp"
 
 namespace dpts::io {
 namespace {
@@ -264,6 +268,52 @@ void check_raw_size(GDALDataset& ds, const std::string& path) {
   }
 }
 
+// The plain file behind a name GDAL reads: the name itself, or for /vsizip/, /vsitar/,
+// /vsigzip/ and the like the archive (the first prefix of the path inside that is a regular
+// file, or the {braced} archive name); empty for what is no local file (/vsimem/, /vsicurl/).
+std::string local_file_of(const std::string& name) {
+  if (name.rfind("/vsi", 0) != 0) return name;
+  const std::size_t slash = name.find('/', 1);
+  if (slash == std::string::npos) return {};
+  const std::string rest = name.substr(slash + 1);
+  if (rest.rfind("/vsi", 0) == 0) return local_file_of(rest);
+  if (!rest.empty() && rest[0] == '{') {
+    const std::size_t close = rest.find('}');
+    return close == std::string::npos ? std::string() : local_file_of(rest.substr(1, close - 1));
+  }
+  for (std::size_t p = rest.find('/', 1);; p = rest.find('/', p + 1)) {
+    const std::string prefix = rest.substr(0, p);
+    struct stat st {};
+    if (::stat(prefix.c_str(), &st) == 0 && S_ISREG(st.st_mode)) return prefix;
+    if (p == std::string::npos) return {};
+  }
+}
+
+// The dataset's files, as local files; and each netCDF classic file among them must hold
+// every value its header declares (cut short, it reads as zeros without an error).
+std::vector<std::string> dataset_files(GDALDataset& ds, const std::string& path) {
+  std::vector<std::string> files;
+  const auto add = [&](const std::string& f) {
+    if (!f.empty() && std::find(files.begin(), files.end(), f) == files.end()) files.push_back(f);
+  };
+  std::vector<std::string> names;
+  char** list = ds.GetFileList();
+  for (int i = 0; list && list[i]; ++i) names.emplace_back(list[i]);
+  CSLDestroy(list);
+  for (const std::string& name : names) {
+    add(local_file_of(name));
+    if (const auto need = netcdf_classic_needed_bytes(name)) {
+      VSIStatBufL st;
+      if (VSIStatL(name.c_str(), &st) == 0 && static_cast<std::uint64_t>(st.st_size) < *need) {
+        throw InputError(path + ": truncated: " + name + " has " + std::to_string(st.st_size) +
+                         " bytes, its netCDF header declares " + std::to_string(*need));
+      }
+    }
+  }
+  add(local_file_of(path));
+  return files;
+}
+
 }  // namespace
 
 DemInfo::FileStamp DemInfo::stamp_of(const std::string& path) {
@@ -324,6 +374,7 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
   }
   const int width = ds->GetRasterXSize(), height = ds->GetRasterYSize();
   check_raw_size(*ds, path);
+  dem.files = dataset_files(*ds, path);
   if (width < 2 || height < 2) {
     throw InputError(path + ": " + std::to_string(width) + " x " + std::to_string(height) +
                      " cells; at least 2 x 2 are needed");
@@ -486,7 +537,26 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
   return dem;
 }
 
+namespace {
+
+// HDF5 (under GDAL's netCDF-4 and HDF5 drivers) prints its error stack on stderr, hundreds of
+// lines for the optional attributes GDAL probes, from every thread that has not turned that
+// off; GDAL turns it off on the thread that opens a file only. So each thread turns it off
+// before its first open or read (H5Eset_auto2(H5E_DEFAULT, null, null), looked up at run time:
+// dpts does not link HDF5, and GDAL may be built without it).
+void quiet_hdf5_on_this_thread() {
+  thread_local bool done = false;
+  if (done) return;
+  done = true;
+  using SetAuto = int (*)(std::int64_t, void*, void*);
+  static const auto set_auto = reinterpret_cast<SetAuto>(::dlsym(RTLD_DEFAULT, "H5Eset_auto2"));
+  if (set_auto) set_auto(0, nullptr, nullptr);
+}
+
+}  // namespace
+
 WindowReader::WindowReader(const DemInfo& info) : info_(info), dataset_(nullptr) {
+  quiet_hdf5_on_this_thread();
   CPLErrorReset();
   dataset_ = GDALDataset::Open(info.path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY);
   if (!dataset_ || static_cast<GDALDataset*>(dataset_)->GetRasterCount() < info.band) {
@@ -499,6 +569,7 @@ WindowReader::~WindowReader() { GDALClose(dataset_); }
 
 core::HeightGrid WindowReader::read(int col0, int row0, int width, int height,
                                     const core::Progress& progress) {
+  quiet_hdf5_on_this_thread();
   info_.check_unchanged();
   GDALRasterBand* band = static_cast<GDALDataset*>(dataset_)->GetRasterBand(info_.band);
   core::HeightGrid grid;

@@ -41,6 +41,9 @@ struct DemInfo {
   std::string output_wkt;          // CRS of the output coordinates; empty if the DEM has none
   std::string output_crs_name;     // short name for messages
   std::vector<std::string> notes;  // what the user should know (CRS choices, warnings)
+  // The plain files the dataset is read from (GDAL's file list: an ENVI .hdr, a VRT's
+  // sources; the archive behind /vsizip/ and the like), so that no output is written over one.
+  std::vector<std::string> files;
   double metres_per_output_unit = 1.0;
   double geotransform[6] = {0, 1, 0, 0, 0, -1};
   int band = 1;                // the band read (1-based)

@@ -210,7 +210,8 @@ void write_raster(const std::filesystem::path& path, const core::HeightGrid& gri
   const GDALDataType type = GDALGetDataTypeByName(spec.type.c_str());
   if (type == GDT_Unknown) throw std::runtime_error("unknown GDAL type " + spec.type);
   GDALDriver* mem = GetGDALDriverManager()->GetDriverByName("MEM");
-  GDALDriver* gtiff = GetGDALDriverManager()->GetDriverByName("GTiff");
+  GDALDriver* format = GetGDALDriverManager()->GetDriverByName(spec.driver.c_str());
+  if (!format) throw std::runtime_error("no GDAL driver " + spec.driver);
   std::vector<const char*> opts;
   for (const auto& o : spec.creation_options) opts.push_back(o.c_str());
   opts.push_back(nullptr);
@@ -244,8 +245,8 @@ void write_raster(const std::filesystem::path& path, const core::HeightGrid& gri
       throw std::runtime_error("cannot write band " + std::to_string(b));
     }
   }
-  GDALDataset* out = gtiff->CreateCopy(path.c_str(), ds, FALSE, const_cast<char**>(opts.data()),
-                                       nullptr, nullptr);
+  GDALDataset* out = format->CreateCopy(path.c_str(), ds, FALSE, const_cast<char**>(opts.data()),
+                                        nullptr, nullptr);
   GDALClose(ds);
   if (!out) throw std::runtime_error("cannot write " + path.string());
   GDALClose(out);

@@ -81,6 +81,7 @@ struct RasterSpec {
   double nodata = 0;
   std::vector<std::string> creation_options;
   double scale = 1, offset = 0;
+  std::string driver = "GTiff";  // GDAL's name of the format written
 };
 void write_raster(const std::filesystem::path& path, const core::HeightGrid& grid,
                   const RasterSpec& spec);

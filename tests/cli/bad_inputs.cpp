@@ -73,6 +73,25 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
             " has 640 bytes, its cells need 1200");
   }
 
+  {
+    // netCDF classic files cut short (CDF-1 and CDF-2): their library reads zeros past the
+    // end, so the size the header declares is checked when the file is opened.
+    for (const std::string format : {"NC", "NC2"}) {
+      RasterSpec nc;
+      nc.driver = "netCDF";
+      nc.creation_options = {"FORMAT=" + format};
+      const std::string name = "cut_" + format + ".nc";
+      const std::string cut = raster(name, 40, 30, hill, nc);
+      const auto full = fs::file_size(cut);
+      fs::resize_file(cut, full - 1);
+      add("truncated netCDF (" + format + ")", {cut, out}, 1,
+          cut + ": truncated: " + cut + " has " + std::to_string(full - 1) +
+              " bytes, its netCDF header declares " + std::to_string(full));
+      add("truncated netCDF subdataset (" + format + ")", {"NETCDF:\"" + cut + "\":Band1", out}, 1,
+          "NETCDF:\"" + cut + "\":Band1: truncated: " + cut + " has ");
+    }
+  }
+
   // Too few valid cells.
   RasterSpec nodata;
   nodata.has_nodata = true;
@@ -214,6 +233,13 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
     ok(std::string(type) + " cells", {raster(std::string("type_") + type + ".tif", 12, 10,
                                              [](int c, int r) { return 100.0 + 7 * c + r; }, t),
                                       out});
+  }
+  for (const std::string format : {"NC", "NC2", "NC4"}) {
+    RasterSpec nc;
+    nc.driver = "netCDF";
+    nc.creation_options = {"FORMAT=" + format};
+    ok("netCDF raster (" + format + ")",
+       {raster("whole_" + format + ".nc", 20, 15, hill, nc), out});
   }
   RasterSpec sbyte;
   sbyte.type = "Byte";

@@ -266,6 +266,26 @@ TEST_CASE("dpts-eval refuses --sample-points with --points or --sets, and output
   CHECK(over.err.rfind("dpts-eval: --pairs-out " + pts + ": is an input of the run\n", 0) == 0);
 }
 
+TEST_CASE("dpts-eval refuses a --pairs-out that is a file of the DEM's dataset",
+          "[cli][eval][robust]") {
+  test::TempDir dir;
+  test::RasterSpec envi;
+  envi.driver = "ENVI";
+  envi.geotransform = {400000, 10, 0, 3800000, 0, -10};
+  envi.wkt = test::epsg_wkt(32611);
+  const std::string dem = (dir / "dem.envi").string(), hdr = (dir / "dem.hdr").string();
+  test::write_raster(dem, test::make_grid(12, 10, [](int c, int r) { return 100.0 + c + r; }),
+                     envi);
+  std::ifstream in(hdr);
+  const std::string before((std::istreambuf_iterator<char>(in)), {});
+  const auto r = test::run(kEval, {"--dem", dem, "--mesh", "m.ply", "--pairs-out", hdr});
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.rfind("dpts-eval: --pairs-out " + hdr + ": is " + hdr + ", a file of the DEM\n", 0) ==
+        0);
+  std::ifstream again(hdr);
+  CHECK(std::string((std::istreambuf_iterator<char>(again)), {}) == before);
+}
+
 TEST_CASE("dpts-eval answers each bad sample-point file in one line and writes nothing",
           "[cli][eval][sample][robust]") {
   Fixture fx;

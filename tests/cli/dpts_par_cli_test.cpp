@@ -393,6 +393,82 @@ TEST_CASE("an output name of 255 bytes is written, and a replaced output keeps i
   CHECK(fx.dir.files().size() == 2);
 }
 
+TEST_CASE("an OUTPUT or --report that is any file of the input dataset is refused, unchanged",
+          "[cli][robust]") {
+  Fixture fx;
+  const auto bytes = [](const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  // An ENVI raster: its .hdr is one of its files.
+  test::RasterSpec envi;
+  envi.driver = "ENVI";
+  envi.geotransform = {400000, 10, 0, 3800000, 0, -10};
+  envi.wkt = utm_wkt();
+  const std::string raw = (fx.dir / "dem.envi").string();
+  test::write_raster(raw, test::make_grid(12, 10, [](int c, int r) { return 100.0 + c + r; }),
+                     envi);
+  const std::string hdr = (fx.dir / "dem.hdr").string();
+  REQUIRE(std::filesystem::exists(hdr));
+  // A VRT over dem.tif: its source is one of its files.
+  const std::string vrt = (fx.dir / "dem.vrt").string();
+  std::ofstream(vrt) << "<VRTDataset rasterXSize=\"30\" rasterYSize=\"20\"><GeoTransform>"
+                        "400000, 10, 0, 3800000, 0, -10</GeoTransform><VRTRasterBand "
+                        "dataType=\"Float32\" band=\"1\"><SimpleSource><SourceFilename "
+                        "relativeToVRT=\"1\">dem.tif</SourceFilename><SourceBand>1</SourceBand>"
+                        "</SimpleSource></VRTRasterBand></VRTDataset>\n";
+  // A zip holding dem.tif, read through /vsizip/: the zip is the file behind it.
+  const std::string zip = (fx.dir / "dems.zip").string();
+  {
+    const std::string tif = bytes(fx.dem);
+    VSILFILE* f = VSIFOpenL(("/vsizip/" + zip + "/dem.tif").c_str(), "wb");
+    REQUIRE(f != nullptr);
+    REQUIRE(VSIFWriteL(tif.data(), 1, tif.size(), f) == tif.size());
+    VSIFCloseL(f);
+  }
+  struct Case {
+    std::string input, victim;
+  };
+  for (const Case& c : {Case{raw, hdr}, Case{vrt, fx.dem}, Case{"/vsizip/" + zip + "/dem.tif", zip},
+                        Case{"/vsizip/{" + zip + "}/dem.tif", zip}}) {
+    INFO(c.input << " over " << c.victim);
+    const std::string before = bytes(c.victim);
+    auto r = test::run(kExe, {c.input, c.victim});
+    CHECK(r.exit_code == 2);
+    CHECK(r.err.rfind("dpts-par: " + c.victim + ": OUTPUT is ", 0) == 0);
+    CHECK(r.err.find("a file of the INPUT dataset; refusing to overwrite it") != std::string::npos);
+    const std::string out = (fx.dir / "out.ply").string();
+    r = test::run(kExe, {"--report", c.victim, c.input, out});
+    CHECK(r.exit_code == 2);
+    CHECK(r.err.rfind("dpts-par: " + c.victim + ": --report names ", 0) == 0);
+    CHECK(bytes(c.victim) == before);
+    CHECK_FALSE(std::filesystem::exists(out));
+  }
+  // The same input to a new file still runs.
+  const std::string out = (fx.dir / "out.ply").string();
+  CHECK(test::run(kExe, {"--quiet", "/vsizip/" + zip + "/dem.tif", out}).exit_code == 0);
+  CHECK(test::run(kExe, {"--quiet", raw, out}).exit_code == 0);
+}
+
+TEST_CASE("a netCDF-4 DEM read by worker threads prints no HDF5 error stack", "[cli][robust]") {
+  test::TempDir dir;
+  test::RasterSpec nc;
+  nc.driver = "netCDF";
+  nc.creation_options = {"FORMAT=NC4"};
+  nc.geotransform = {400000, 10, 0, 3800000, 0, -10};
+  nc.wkt = utm_wkt();
+  const std::string dem = (dir / "dem.nc").string();
+  test::write_raster(dem, test::make_grid(60, 50, [](int c, int r) { return 100.0 + c + r; }), nc);
+  for (const std::string algo : {"qem", "vp-meta"}) {
+    INFO(algo);
+    const auto r =
+        test::run(kExe, {"--algo", algo, "--threads", "2", dem, (dir / "o.ply").string()});
+    CHECK(r.exit_code == 0);
+    CHECK(r.err.find("HDF5") == std::string::npos);
+    CHECK(count_lines(r.err) == 1);
+  }
+}
+
 TEST_CASE(
     "SIGTERM, SIGINT and SIGHUP stop a long run promptly, leaving no output and no temporary file",
     "[cli][robust]") {
