@@ -106,6 +106,10 @@ void collect(Job& job, int wait_status) {
   job.status = "failed";
   job.error = exited ? "dpts-par exited with status " + std::to_string(code) + " and no report"
                      : "dpts-par was killed by signal " + std::to_string(WTERMSIG(wait_status));
+  // A child killed (a crash, the kernel's OOM killer, a CPU limit) could not remove its
+  // temporary output and report; the batch holds the folder's lock, so they are its own.
+  io::AtomicOutputFile::remove_leftovers(job.output);
+  io::AtomicOutputFile::remove_leftovers(job.report);
 }
 
 }  // namespace

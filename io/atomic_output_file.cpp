@@ -21,6 +21,40 @@ bool AtomicOutputFile::streams_to(const fs::path& final_path) {
   return !ec && (fs::is_fifo(st) || fs::is_character_file(st) || fs::is_socket(st));
 }
 
+namespace {
+
+// The temporary name's start, before mkstemp's 6 characters: 16 bytes longer than the
+// output's name in all, so a name near the limit of 255 (NAME_MAX) is cut for it.
+std::string temp_prefix(const std::filesystem::path& final_path) {
+  std::string base = final_path.filename().string();
+  if (base.size() > 255 - 16) base.resize(255 - 16);
+  return "." + base + ".partial-";
+}
+
+}  // namespace
+
+int AtomicOutputFile::remove_leftovers(const std::filesystem::path& final_path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::path target = final_path;
+  for (int hops = 0; hops < 40 && fs::is_symlink(fs::symlink_status(target, ec)); ++hops) {
+    const fs::path next = fs::read_symlink(target, ec);
+    if (ec) break;
+    target = next.is_absolute() ? next : target.parent_path() / next;
+  }
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  const std::string prefix = temp_prefix(target);
+  int removed = 0;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() == prefix.size() + 6 && name.compare(0, prefix.size(), prefix) == 0 &&
+        entry.is_regular_file(ec) && fs::remove(entry.path(), ec)) {
+      ++removed;
+    }
+  }
+  return removed;
+}
+
 AtomicOutputFile::AtomicOutputFile(fs::path final_path) : final_(std::move(final_path)) {
   std::error_code ec;
   if (streams_to(final_)) {
@@ -46,11 +80,7 @@ AtomicOutputFile::AtomicOutputFile(fs::path final_path) : final_(std::move(final
     final_ = target.is_absolute() ? target : final_.parent_path() / target;
   }
   const auto dir = final_.has_parent_path() ? final_.parent_path() : std::filesystem::path(".");
-  // The temporary name is 16 bytes longer than the output's: a name near the limit of 255
-  // (NAME_MAX) is cut for it.
-  std::string base = final_.filename().string();
-  if (base.size() > 255 - 16) base.resize(255 - 16);
-  std::string pattern = (dir / ("." + base + ".partial-XXXXXX")).string();
+  std::string pattern = (dir / (temp_prefix(final_) + "XXXXXX")).string();
   std::vector<char> name(pattern.begin(), pattern.end());
   name.push_back('\0');
   const int fd = ::mkstemp(name.data());

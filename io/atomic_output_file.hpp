@@ -17,6 +17,11 @@ class AtomicOutputFile {
   // folder or a block device is refused.
   explicit AtomicOutputFile(std::filesystem::path final_path);
 
+  // Removes the temporary files a process killed while writing final_path left behind (the
+  // ones a crash cannot clean up); returns how many. For a caller that knows no other
+  // process writes final_path now (a batch, under its folder's lock).
+  static int remove_leftovers(const std::filesystem::path& final_path);
+
   // Whether final_path (links followed) is written as a stream (see above).
   static bool streams_to(const std::filesystem::path& final_path);
   ~AtomicOutputFile();  // not committed: removes the temporary file

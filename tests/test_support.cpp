@@ -142,6 +142,12 @@ RunResult run(const std::string& exe, const std::vector<std::string>& args,
       const rlimit limit{options.address_space_limit, options.address_space_limit};
       ::setrlimit(RLIMIT_AS, &limit);
     }
+    if (options.cpu_limit_s > 0) {
+      const rlimit no_core{0, 0};
+      ::setrlimit(RLIMIT_CORE, &no_core);
+      const rlimit limit{static_cast<rlim_t>(options.cpu_limit_s), RLIM_INFINITY};
+      ::setrlimit(RLIMIT_CPU, &limit);
+    }
     if (!options.cwd.empty() && ::chdir(options.cwd.c_str()) != 0) ::_exit(126);
     std::vector<char*> argv;
     argv.push_back(const_cast<char*>(exe.c_str()));

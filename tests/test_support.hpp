@@ -57,6 +57,7 @@ struct RunOptions {
   std::string cwd;                  // the child's working folder (empty: ours)
   bool close_stderr = false;        // start the child with descriptor 2 closed (2>&-)
   std::size_t address_space_limit = 0;  // RLIMIT_AS in bytes (0: none)
+  int cpu_limit_s = 0;  // RLIMIT_CPU's soft limit (0: none): SIGXCPU kills past it (no core)
 };
 
 // Runs an executable with arguments (no shell), capturing stdout and stderr.

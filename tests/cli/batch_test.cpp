@@ -193,6 +193,38 @@ TEST_CASE("two batches into one folder: the second is refused while the first ru
   CHECK(fs::exists(out / "dem0.ply"));
 }
 
+TEST_CASE("a batch child killed mid-run leaves no temporary file, and the batch goes on",
+          "[cli][batch][robust]") {
+  test::TempDir dir;
+  make_folder(dir / "in", 12, 1);
+  fs::remove(dir / "in" / "broken.tif");
+  // Far more than 3 s of CPU: under a 3 s CPU limit the kernel kills its child (SIGXCPU)
+  // after its temporary output exists.
+  test::write_geotiff(
+      dir / "in" / "big.tif",
+      test::make_grid(
+          1300, 1300,
+          [](int c, int r) { return 500.0 + 40.0 * std::sin(c * 0.05) * std::cos(r * 0.07); }),
+      {400000, 10, 0, 3800000, 0, -10}, test::epsg_wkt(32611));
+  test::RunOptions ro;
+  ro.cpu_limit_s = 3;  // the small DEM needs well under it, sanitizers included
+  const auto r = test::run(kExe,
+                           {"--batch", (dir / "in").string(), "--out-dir", (dir / "out").string(),
+                            "--jobs", "1", "--threads", "2", "--quiet"},
+                           ro);
+  CHECK(r.exit_code == 1);
+  const std::string summary = slurp(dir / "out" / "batch-summary.json");
+  CHECK(field(summary, "ok") == "1");
+  CHECK(field(summary, "failed") == "1");
+  CHECK(summary.find("dpts-par was killed by signal " + std::to_string(SIGXCPU)) !=
+        std::string::npos);
+  CHECK(fs::exists(dir / "out" / "dem0.ply"));
+  CHECK_FALSE(fs::exists(dir / "out" / "big.ply"));
+  for (const auto& entry : fs::directory_iterator(dir / "out")) {
+    CHECK(entry.path().filename().string().find(".partial") == std::string::npos);
+  }
+}
+
 TEST_CASE("batch usage errors exit 2", "[cli][batch]") {
   test::TempDir dir;
   const std::string d = dir.path().string();
