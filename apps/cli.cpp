@@ -39,7 +39,8 @@ std::string par_help() {
        dpts-par --batch LIST|DIR --out-dir OUT [--jobs N] [options]
 
 Simplifies a DEM (a band of any raster GDAL reads) into a TIN that preserves surface
-(geodesic) distances, and writes it as PLY.
+(geodesic) distances, and writes it as PLY. OUTPUT - is standard output; INPUT - is
+standard input (GDAL's /vsistdin/).
 
   --algo ALGO          qem (default): dpts's quadric edge collapse (triangle quadrics, a
                        cost that sees surface area, the outline's straight runs simplified
@@ -267,8 +268,14 @@ ParOptions parse_par(const std::vector<std::string>& args) {
     throw UsageError(positional.size() < 2 ? "expected INPUT and OUTPUT"
                                            : "unexpected argument '" + positional[2] + "'");
   }
-  o.input = positional[0];
-  o.output = positional[1];
+  for (const int k : {0, 1}) {
+    if (positional[static_cast<std::size_t>(k)].empty()) {
+      throw UsageError(std::string(k == 0 ? "INPUT" : "OUTPUT") + " is an empty name");
+    }
+  }
+  // "-": the standard streams, as other tools take it.
+  o.input = positional[0] == "-" ? "/vsistdin/" : positional[0];
+  o.output = positional[1] == "-" ? "/dev/stdout" : positional[1];
   if (!o.report.empty() && (same_file(o.report, o.input) || same_file(o.report, o.output))) {
     throw UsageError("--report " + o.report + ": is the " +
                      (same_file(o.report, o.input) ? "INPUT" : "OUTPUT") +

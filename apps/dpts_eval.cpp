@@ -526,7 +526,9 @@ int run(const Options& o) {
 int main(int argc, char** argv) {
   dpts::cli::reopen_closed_std_streams();
   GDALAllRegister();
-  CPLPushErrorHandler(CPLQuietErrorHandler);
+  // Every thread's: GDAL's errors become our one-line messages (a pushed handler is the
+  // calling thread's only, and worker threads printed GDAL's own lines).
+  CPLSetErrorHandler(CPLQuietErrorHandler);
   if (!CPLGetConfigOption("GDAL_CACHEMAX", nullptr)) CPLSetConfigOption("GDAL_CACHEMAX", "64");
   try {
     return run(parse(std::vector<std::string>(argv + 1, argv + argc)));

@@ -360,6 +360,12 @@ int run(const dpts::cli::ParOptions& o) {
   g_report.clock.enter("open");
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
                                   static_cast<std::size_t>(threads));
+  // A raster on standard input is read more than once (opened, then piece by piece): GDAL
+  // keeps all of it, not its default first 1 MB, unless the user says otherwise.
+  if (o.input.rfind("/vsistdin", 0) == 0 &&
+      !CPLGetConfigOption("CPL_VSISTDIN_BUFFER_LIMIT", nullptr)) {
+    CPLSetConfigOption("CPL_VSISTDIN_BUFFER_LIMIT", "-1");
+  }
   for (const auto& [key, value] : o.config) CPLSetConfigOption(key.c_str(), value.c_str());
   if (dpts::cli::same_file(o.input, o.output)) {
     throw UsageError(o.output + ": OUTPUT is the INPUT file; refusing to overwrite it");
@@ -428,7 +434,9 @@ int main(int argc, char** argv) {
   sigaction(SIGHUP, &sa, nullptr);
   std::signal(SIGPIPE, SIG_IGN);
   GDALAllRegister();
-  CPLPushErrorHandler(CPLQuietErrorHandler);
+  // Every thread's: GDAL's errors become our one-line messages (a pushed handler is the
+  // calling thread's only, and worker threads printed GDAL's own lines).
+  CPLSetErrorHandler(CPLQuietErrorHandler);
   // A bounded block cache: GDAL's default (5 % of RAM) would cache the whole raster.
   g_user_cache = CPLGetConfigOption("GDAL_CACHEMAX", nullptr) != nullptr;
   if (!g_user_cache) CPLSetConfigOption("GDAL_CACHEMAX", "64");

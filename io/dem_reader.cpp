@@ -353,9 +353,10 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
   // A FIFO with no writer would block the open forever, a device read without end.
   const std::filesystem::file_status st = std::filesystem::status(path, ec);
   if (!virtual_file && !std::filesystem::is_regular_file(st)) {
-    throw InputError(path +
-                     ": is a pipe or a device, not a raster file (a raster on standard input: "
-                     "/vsistdin/)");
+    throw InputError(
+        path +
+        ": is a pipe or a device, not a raster file (a raster on standard input: \"-\" as "
+        "dpts-par's INPUT, or /vsistdin/)");
   }
 
   CPLErrorReset();

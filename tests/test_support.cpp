@@ -130,6 +130,9 @@ RunResult run(const std::string& exe, const std::vector<std::string>& args,
                         ? ::open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600)
                         : ::open(options.stdout_to.c_str(), O_WRONLY);
     const int err = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    const int in =
+        ::open(options.stdin_from.empty() ? "/dev/null" : options.stdin_from.c_str(), O_RDONLY);
+    ::dup2(in, 0);
     ::dup2(out, 1);
     ::dup2(err, 2);
     if (options.close_stderr) ::close(2);

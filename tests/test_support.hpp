@@ -54,6 +54,7 @@ struct RunOptions {
   double signal_after_s = 0;        // ...or once this many seconds have passed (0: never)
   int signal = 15;                  // SIGTERM
   std::string stdout_to;            // a file stdout goes to (e.g. /dev/full), not captured
+  std::string stdin_from;           // a file stdin reads (empty: /dev/null)
   std::string cwd;                  // the child's working folder (empty: ours)
   bool close_stderr = false;        // start the child with descriptor 2 closed (2>&-)
   std::size_t address_space_limit = 0;  // RLIMIT_AS in bytes (0: none)

@@ -56,6 +56,15 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
     add("truncated GeoTIFF (vp-meta)", {"--algo", "vp-meta", cut, out}, 1, why);
     add("truncated GeoTIFF (qslim)", {"--algo", "qslim", cut, out}, 1, why);
     add("truncated GeoTIFF (qem)", {"--algo", "qem", cut, out}, 1, why);
+    // A tiled, compressed GeoTIFF cut short: its pieces' reads fail on worker threads, which
+    // must not print GDAL's own lines beside the one message.
+    RasterSpec tiled;
+    tiled.creation_options = {"TILED=YES", "COMPRESS=DEFLATE"};
+    const std::string cut_tiles = raster(
+        "cut_tiles.tif", 600, 600, [](int c, int r) { return hill(c, r) + 0.01 * c * r; }, tiled);
+    fs::resize_file(cut_tiles, fs::file_size(cut_tiles) / 2);
+    add("truncated tiled GeoTIFF, read by workers", {"--threads", "2", cut_tiles, out}, 1,
+        cut_tiles + ": read failed at rows ");
     // An ENVI raster (a text header and raw cells) cut short: GDAL reads zeros past its end.
     std::ofstream(dir / "cut.hdr") << "ENVI\nsamples = 20\nlines = 15\nbands = 1\n"
                                       "header offset = 0\ndata type = 4\ninterleave = bsq\n"
@@ -191,6 +200,8 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
 
   // Usage and output safety.
   add("output is the input", {fine, fine}, 2, fine + ": OUTPUT is the INPUT file");
+  add("empty OUTPUT name", {fine, ""}, 2, "OUTPUT is an empty name");
+  add("empty INPUT name", {"", out}, 2, "INPUT is an empty name");
   add("output folder missing", {fine, path("no/such/dir/out.ply")}, 1,
       path("no/such/dir/out.ply") + ": cannot create output");
   cases.push_back({"disk full while writing (1 kB file size limit)",
