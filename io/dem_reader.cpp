@@ -409,6 +409,23 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
                   gt[4], gt[5]);
     throw InputError(path + ": geotransform has zero cell size (" + coefficients + ")");
   }
+  // Cells so small beside the coordinates' magnitude that doubles hardly tell their corners
+  // apart (fewer than ~5000 steps of the last bit per cell; folds were measured from 2e-14)
+  // give rounded, folded triangles: refused here, not as folds found at the end.
+  {
+    const double far_corner = std::max({std::abs(gt[0]), std::abs(gt[3]),
+                                        std::abs(gt[0] + width * gt[1] + height * gt[2]),
+                                        std::abs(gt[3] + width * gt[4] + height * gt[5])});
+    const double cell = std::min(std::hypot(gt[1], gt[4]), std::hypot(gt[2], gt[5]));
+    if (cell < 1e-12 * far_corner) {
+      char why[160];
+      std::snprintf(why, sizeof why,
+                    ": cells of %.3g are too small for coordinates of %.3g (doubles cannot "
+                    "place them apart); shift the geotransform's origin",
+                    cell, far_corner);
+      throw InputError(path + why);
+    }
+  }
 
   // CRS: distances and volumes must be metric; project geographic coordinates.
   OGRSpatialReference src;

@@ -150,6 +150,9 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
   const std::string thin = vrt("thin.vrt", "400000, 10, 0, 3800000, 0, -0.00001");
   add("cells 10^6 times wider than high", {thin, out}, 1,
       thin + ": degenerate cell geometry (cells are too thin");
+  const std::string tiny = vrt("tiny_cells.vrt", "400000, 1e-9, 0, 3800000, 0, -1e-9");
+  add("cells of 1e-9 at coordinates of 4e6", {tiny, out}, 1,
+      tiny + ": cells of 1e-09 are too small for coordinates of 3.8e+06");
   const std::string inf = vrt("nan_gt.vrt", "400000, nan, 0, 3800000, 0, -10");
   add("non-finite geotransform", {inf, out}, 1, inf + ": geotransform is not finite");
   {
