@@ -14,6 +14,7 @@
 #include <cmath>
 #include <csignal>
 #include <fstream>
+#include <iostream>
 #include <limits>
 #include <map>
 #include <random>
@@ -188,6 +189,14 @@ RunResult run(const std::string& exe, const std::vector<std::string>& args,
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   r.out = slurp(out_path);
   r.err = slurp(err_path);
+  // A child that crashed or aborted (a sanitizer's report, std::terminate) says why on its
+  // stderr, which the tests do not print: shown here so that a CI log holds it.
+  const int sig = WIFSIGNALED(status) ? WTERMSIG(status) : 0;
+  if (sig == SIGABRT || sig == SIGSEGV || sig == SIGBUS || sig == SIGILL || sig == SIGFPE ||
+      r.exit_code == 128 + SIGABRT) {
+    std::cerr << "test::run: " << exe << " died (exit " << r.exit_code << "); its stderr:\n"
+              << r.err.substr(r.err.size() > 20000 ? r.err.size() - 20000 : 0) << "\n";
+  }
   return r;
 }
 
