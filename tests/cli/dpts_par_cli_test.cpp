@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "core/mesh_check.hpp"
+#include "io/json.hpp"
 #include "io/ply.hpp"
 #include "test_support.hpp"
 
@@ -513,6 +514,26 @@ TEST_CASE("a dash as INPUT reads standard input, as OUTPUT writes standard outpu
   CHECK(cut.out.empty());
 }
 
+TEST_CASE("SIGPIPE (a reader of stderr gone) does not kill a run", "[cli][robust]") {
+  test::TempDir dir;
+  const auto dem = (dir / "dem.tif").string();
+  test::write_geotiff(
+      dem,
+      test::make_grid(
+          600, 600,
+          [](int c, int r) { return 500.0 + 40.0 * std::sin(c * 0.05) * std::cos(r * 0.07); }),
+      {400000, 10, 0, 3800000, 0, -10}, utm_wkt());
+  const auto out = (dir / "out.ply").string();
+  test::RunOptions ro;
+  ro.signal = SIGPIPE;
+  ro.signal_after_s = 0.2;
+  const auto r = test::run(kExe, {"--threads", "2", dem, out}, ro);
+  CHECK(r.seconds_after_signal >= 0);  // sent while it ran
+  CHECK(r.exit_code == 0);
+  CHECK(io::read_ply_file(out).vertex_count() > 0);
+  CHECK(dir.files() == std::vector<std::string>{"dem.tif", "out.ply"});
+}
+
 TEST_CASE(
     "SIGTERM, SIGINT and SIGHUP stop a long run promptly, leaving no output and no temporary file",
     "[cli][robust]") {
@@ -543,13 +564,18 @@ TEST_CASE(
     ro.signal_when = c.stage;
     ro.signal_after_s = 30;
     ro.signal = sig;
-    const auto r = test::run(kExe, {"--algo", algo, "--threads", "2", dem, out}, ro);
+    const auto report = (dir / "run.json").string();
+    const auto r =
+        test::run(kExe, {"--algo", algo, "--threads", "2", "--report", report, dem, out}, ro);
     CHECK(r.exit_code == 1);
+    std::ifstream rj(report);
+    const std::string json((std::istreambuf_iterator<char>(rj)), {});
+    CHECK(io::json_field(json, "status") == "interrupted");
     CHECK(r.err.find("dpts-par: interrupted; no output written") != std::string::npos);
     // Promptly: checked between removals and strips (0.2 s measured; sanitizers are slower).
     CHECK(r.seconds_after_signal >= 0);
     CHECK(r.seconds_after_signal < 10);
-    CHECK(dir.files() == std::vector<std::string>{"big.tif", "out.ply"});
+    CHECK(dir.files() == std::vector<std::string>{"big.tif", "out.ply", "run.json"});
     std::ifstream in(out);
     std::string s;
     std::getline(in, s);
