@@ -198,6 +198,26 @@ TEST_CASE("Andorra SRTM voids: qem's pieces in UTM leave every void open, unfold
   }
 }
 
+TEST_CASE("peru_mongon at 50-95 % with qem: no face flat or folded in the output CRS",
+          "[shared][qem]") {
+  // An optimum nearly on the line of two corners made faces a rounding error from flat in the
+  // frame, which the map to UTM turned flat or clockwise (2 at 70 %, 10 at 90 %): refused as
+  // slivers now, so dpts-par writes what it made.
+  GDALAllRegister();
+  const io::Dem dem = io::read_dem(test::shared_data("peru_mongon.tif"), {}, nullptr);
+  for (const double percent : {50.0, 70.0, 80.0, 90.0, 95.0}) {
+    INFO(percent << " %");
+    par::QemEngineOptions o;
+    o.keep.percent = percent;
+    par::MetaStats st;
+    const core::TriMesh m = par::simplify_qem(dem, o, nullptr, &st);
+    CHECK(m.vertex_count() == par::target_count(o.keep, st.input_vertices));
+    const core::MeshCheck mc = core::check_mesh(core::xy_of(m.xyz), m.faces);
+    CHECK(mc.clockwise_or_flat == 0);
+    CHECK(mc.bad_edges == 0);
+  }
+}
+
 TEST_CASE("qem's pieces with --max-error: every valid cell centre within the bound",
           "[shared][qem]") {
   // Across 8 pieces and the merge (which reads the cells under its triangles again, block by
