@@ -520,13 +520,13 @@ TEST_CASE("SIGPIPE (a reader of stderr gone) does not kill a run", "[cli][robust
   test::write_geotiff(
       dem,
       test::make_grid(
-          600, 600,
+          1500, 1500,
           [](int c, int r) { return 500.0 + 40.0 * std::sin(c * 0.05) * std::cos(r * 0.07); }),
       {400000, 10, 0, 3800000, 0, -10}, utm_wkt());
   const auto out = (dir / "out.ply").string();
   test::RunOptions ro;
   ro.signal = SIGPIPE;
-  ro.signal_after_s = 0.2;
+  ro.signal_when = "%";  // the first progress line: well into the run, handlers set
   const auto r = test::run(kExe, {"--threads", "2", dem, out}, ro);
   CHECK(r.seconds_after_signal >= 0);  // sent while it ran
   CHECK(r.exit_code == 0);
