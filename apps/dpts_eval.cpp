@@ -254,6 +254,21 @@ int run(const Options& o) {
     check_stdout();
     return 0;
   }
+  // Each set's pairs live in K x K tables (distances one way and the other, on T and on T',
+  // the meeting search's, which are wanted: about 64 bytes a pair in all, measured from
+  // parallel/evaluate.cpp's arrays): refused up front where they cannot fit, not killed by
+  // the kernel or failing as a bare out-of-memory later.
+  if (o.sample_points.empty()) {
+    const double k = o.eval.points;
+    const double need = k * k * 64;
+    const double have = static_cast<double>(par::available_memory_bytes());
+    if (need > have) {
+      throw std::runtime_error(
+          "--points " + std::to_string(o.eval.points) + ": the " + std::to_string(o.eval.points) +
+          " x " + std::to_string(o.eval.points) + " pairs of a set need about " +
+          par::format_bytes(need) + ", more than the " + par::format_bytes(have) + " available");
+    }
+  }
   const auto start = std::chrono::steady_clock::now();
   const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
@@ -537,6 +552,10 @@ int main(int argc, char** argv) {
     return 2;
   } catch (const dpts::Cancelled&) {
     std::cerr << "dpts-eval: interrupted; no output written\n";
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "dpts-eval: error: out of memory (peak " << (dpts::par::peak_rss_kb() >> 10)
+              << " MB); fewer --points or --threads, or set --max-memory\n";
     return 1;
 
   } catch (const std::exception& e) {

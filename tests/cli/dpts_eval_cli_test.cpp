@@ -266,6 +266,20 @@ TEST_CASE("dpts-eval refuses --sample-points with --points or --sets, and output
   CHECK(over.err.rfind("dpts-eval: --pairs-out " + pts + ": is an input of the run\n", 0) == 0);
 }
 
+TEST_CASE("dpts-eval refuses --points whose pair tables cannot fit, before any work",
+          "[cli][eval][robust]") {
+  Fixture fx;
+  // 10^6 points: 5 x 10^11 pairs a set (a bare std::bad_alloc before; 30000 were killed by
+  // the kernel's OOM killer).
+  const auto r = test::run(kEval, {"--dem", fx.dem, "--mesh", "m.ply", "--points", "1000000"});
+  CHECK(r.exit_code == 1);
+  CHECK(r.err.rfind("dpts-eval: error: --points 1000000: the 1000000 x 1000000 pairs of a set "
+                    "need about ",
+                    0) == 0);
+  CHECK(r.err.find(" available\n") != std::string::npos);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+}
+
 TEST_CASE("dpts-eval refuses a --pairs-out that is a file of the DEM's dataset",
           "[cli][eval][robust]") {
   test::TempDir dir;
