@@ -258,9 +258,8 @@ std::string format_bytes(double bytes) {
   return buf;
 }
 
-std::size_t meta_memory_estimate(std::size_t kept_vertices, std::size_t tile_bytes,
-                                 std::size_t pieces_in_flight) {
-  return kMetaBytesPerKeptVertex * kept_vertices + tile_bytes * pieces_in_flight;
+std::size_t meta_memory_estimate(std::size_t kept_vertices, std::size_t pieces_bytes) {
+  return kMetaBytesPerKeptVertex * kept_vertices + pieces_bytes;
 }
 
 double piece_value(const core::HeightGrid& window, int col0, int row0, const core::GridFrame& frame,
@@ -342,9 +341,24 @@ std::size_t pieces_in_flight(std::size_t pieces) {
                                static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()));
 }
 
+std::size_t pieces_in_flight_bytes(const std::vector<core::Piece>& pieces, int halo,
+                                   std::size_t tile_bytes) {
+  std::vector<std::size_t> bytes;
+  bytes.reserve(pieces.size());
+  for (const core::Piece& p : pieces)
+    bytes.push_back(std::min(tile_bytes, core::piece_bytes(p, halo)));
+  const std::size_t n = pieces_in_flight(pieces.size());
+  std::partial_sort(bytes.begin(), bytes.begin() + static_cast<long>(n), bytes.end(),
+                    std::greater<>());
+  std::size_t sum = 0;
+  for (std::size_t i = 0; i < n; ++i) sum += bytes[i];
+  return sum;
+}
+
 void check_memory(const io::DemInfo& dem, std::size_t target, std::size_t need, std::size_t limit) {
   if (limit == 0 || need <= limit) return;
-  throw InputError(dem.path + ": keeping " + std::to_string(target) + " vertices needs about " +
+  throw InputError(dem.path + ": keeping " + std::to_string(target) +
+                   " vertices, with its pieces in flight, needs about " +
                    format_bytes(static_cast<double>(need)) + ", more than the " +
                    format_bytes(static_cast<double>(limit)) +
                    " available; keep fewer (--keep, --vertices) or use a smaller --tile-mb");
@@ -359,9 +373,10 @@ MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
   // 1. Count surface vertices per block, streaming; divide.
   const std::vector<core::Piece> pieces =
       divide_dem(dem, options.keep, options.levels, bytes, options.halo, progress, st);
-  check_memory(dem, st.target_vertices,
-               meta_memory_estimate(st.target_vertices, bytes, pieces_in_flight(pieces.size())),
-               options.memory_limit_bytes);
+  check_memory(
+      dem, st.target_vertices,
+      meta_memory_estimate(st.target_vertices, pieces_in_flight_bytes(pieces, options.halo, bytes)),
+      options.memory_limit_bytes);
   auto t0 = std::chrono::steady_clock::now();
 
   // 2. Piece values, concurrently: each task reads its piece through its own handle.

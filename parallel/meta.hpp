@@ -34,9 +34,8 @@ struct MetaOptions {
 // the final triangulation), measured on real DEMs with some margin (README, memory).
 inline constexpr std::size_t kMetaBytesPerKeptVertex = 300;
 
-// The meta engine's memory estimate: kept vertices plus one tile per piece in flight.
-std::size_t meta_memory_estimate(std::size_t kept_vertices, std::size_t tile_bytes,
-                                 std::size_t pieces_in_flight);
+// The meta engine's memory estimate: kept vertices plus the pieces in flight (pieces_bytes).
+std::size_t meta_memory_estimate(std::size_t kept_vertices, std::size_t pieces_bytes);
 
 struct PieceReport {
   core::Piece piece;
@@ -83,6 +82,12 @@ std::vector<core::Piece> divide_dem(const io::DemInfo& dem, const KeepTarget& ke
 
 // Pieces simplified at once: as many as there are threads, at most all of them.
 std::size_t pieces_in_flight(std::size_t pieces);
+
+// The working set of the pieces in flight at worst: the largest pieces_in_flight of their
+// estimates (core::piece_bytes, each within tile_bytes), so a small DEM is not charged a
+// whole tile per thread.
+std::size_t pieces_in_flight_bytes(const std::vector<core::Piece>& pieces, int halo,
+                                   std::size_t tile_bytes);
 
 // Refuses (InputError naming the DEM, the target and both sizes) a run whose estimated need
 // exceeds limit; limit 0: no check.

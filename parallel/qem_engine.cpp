@@ -333,7 +333,7 @@ core::TriMesh simplify_qem(const io::DemInfo& dem, const QemEngineOptions& optio
       std::min(1.0, options.slack * fraction) * static_cast<double>(st.input_vertices);
   check_memory(dem, st.target_vertices,
                static_cast<std::size_t>(kept * kQemBytesPerKeptVertex) +
-                   bytes * pieces_in_flight(pieces.size()),
+                   pieces_in_flight_bytes(pieces, 1, bytes),
                options.memory_limit_bytes);
 
   // 2. Simplify the pieces concurrently, seams locked.

@@ -168,11 +168,14 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
     add("70000 x 70000 raster", {"--algo", "vp-meta", path("too_many.vrt"), out}, 1,
         path("too_many.vrt") + ": 70000 x 70000 cells is too many");
   }
-  add("output too large for --max-memory (vp-meta)",
-      {"--algo", "vp-meta", "--max-memory", "16", fine, out}, 1, fine + ": keeping 60 vertices needs about");
+  // One piece of 8000 cells (about 2.6 MB by core::piece_bytes) and 800 kept vertices.
   const std::string medium = raster("medium.tif", 100, 80, hill);
-  add("output too large for --max-memory (qem, the default)", {"--max-memory", "16", fine, out}, 1,
-      fine + ": keeping 60 vertices needs about");
+  add("pieces and output too large for --max-memory (vp-meta)",
+      {"--algo", "vp-meta", "--levels", "0", "--max-memory", "1", medium, out}, 1,
+      medium + ": keeping 800 vertices, with its pieces in flight, needs about");
+  add("pieces and output too large for --max-memory (qem, the default)",
+      {"--levels", "0", "--max-memory", "1", medium, out}, 1,
+      medium + ": keeping 800 vertices, with its pieces in flight, needs about");
   add("DEM too large for --max-memory (vp)", {"--algo", "vp", "--max-memory", "1", medium, out}, 1,
       medium + ": 100 x 80 cells need about");
   {
@@ -215,6 +218,10 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
     cases.push_back({std::move(what), std::move(args), 0, std::move(msg), out, 0});
   };
   ok("2-band raster (band 1 used, said)", {bands, out}, bands + ": 2 bands; using band 1");
+  // A small DEM is charged its pieces' size, not a whole --tile-mb per thread (512 MB).
+  ok("600 cells under --max-memory 16 (qem)", {"--max-memory", "16", fine, out});
+  ok("600 cells under --max-memory 16 (vp-meta)",
+     {"--algo", "vp-meta", "--max-memory", "16", fine, out});
   RasterSpec rotated;
   rotated.geotransform = {400000, 8, 6, 3800000, 6, -8};
   ok("rotated geotransform", {raster("rotated.tif", 20, 15, hill, rotated), out});
