@@ -15,10 +15,30 @@ namespace dpts::io {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+// Whether a path names one of this process's open descriptors (/dev/stdout, /dev/stderr,
+// /dev/fd/N, /proc/self/fd/N): what it leads to was opened by the caller (a shell's
+// redirection), and is written into, never replaced by a new file.
+bool names_descriptor(const fs::path& path) {
+  const std::string p = path.lexically_normal().string();
+  if (p == "/dev/stdout" || p == "/dev/stderr") return true;
+  for (const std::string prefix : {"/dev/fd/", "/proc/self/fd/"}) {
+    if (p.size() > prefix.size() && p.compare(0, prefix.size(), prefix) == 0 &&
+        p.find_first_not_of("0123456789", prefix.size()) == std::string::npos) {
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
 bool AtomicOutputFile::streams_to(const fs::path& final_path) {
   std::error_code ec;
   const fs::file_status st = fs::status(final_path, ec);
-  return !ec && (fs::is_fifo(st) || fs::is_character_file(st) || fs::is_socket(st));
+  return !ec && (fs::is_fifo(st) || fs::is_character_file(st) || fs::is_socket(st) ||
+                 (names_descriptor(final_path) && fs::is_regular_file(st)));
 }
 
 namespace {
@@ -60,8 +80,11 @@ AtomicOutputFile::AtomicOutputFile(fs::path final_path) : final_(std::move(final
   if (streams_to(final_)) {
     // note: opened by its own name, not its link's target: /dev/stdout's target in /proc
     // names a pipe ("pipe:[1234]") that only the link opens.
+    // A regular file behind a descriptor (2> log.txt) is appended to: its open description's
+    // offset is not ours, and writing from 0 would overwrite what is there.
     stream_ = true;
-    out_.open(final_, std::ios::binary | std::ios::out);
+    const bool file = fs::is_regular_file(fs::status(final_, ec));
+    out_.open(final_, std::ios::binary | (file ? std::ios::app : std::ios::out));
     if (!out_) {
       throw IoError(final_.string() + ": cannot open output for writing (" + std::strerror(errno) +
                     ")");

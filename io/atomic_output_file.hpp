@@ -13,8 +13,9 @@ class AtomicOutputFile {
   // an existing file). Throws IoError naming final_path if the directory is not writable.
   // A symbolic link is written through: the file appears at its target, the link stays. A
   // FIFO, character device or socket (a pipe, /dev/stdout, /dev/null) is not replaced but
-  // written into directly, as a stream (what a failed run wrote there stays written). A
-  // folder or a block device is refused.
+  // written into directly, as a stream (what a failed run wrote there stays written); so is
+  // a regular file named as one of this process's descriptors (/dev/stdout, /dev/stderr,
+  // /dev/fd/N: a shell's redirection), appended to. A folder or a block device is refused.
   explicit AtomicOutputFile(std::filesystem::path final_path);
 
   // Removes the temporary files a process killed while writing final_path left behind (the

@@ -358,6 +358,18 @@ TEST_CASE("an output that is a link, a FIFO or a device is written through, neve
     CHECK(fs::is_character_file("/dev/null"));
     CHECK(fx.dir.files() == std::vector<std::string>{"dem.tif", "out.ply"});
   }
+  SECTION("/dev/stderr redirected to a file: the report is appended, the file not replaced") {
+    // The harness sends stderr to a regular file, as 2> log.txt does: the summary line written
+    // first must stay before the report (a rename over the file lost it).
+    const auto out = (fx.dir / "out.ply").string();
+    const auto r = test::run(kExe, {"--report", "/dev/stderr", fx.dem, out});
+    CHECK(r.exit_code == 0);
+    const auto summary = r.err.find(" vertices -> "), json = r.err.find("{\"dpts_version\"");
+    CHECK(r.err.rfind("dpts-par: ", 0) == 0);
+    REQUIRE(json != std::string::npos);
+    CHECK(summary < json);
+    CHECK(io::json_field(r.err.substr(json), "status") == "ok");
+  }
   SECTION("a folder is refused") {
     const auto r = test::run(kExe, {fx.dem, fx.dir.path().string()});
     CHECK(r.exit_code == 1);
