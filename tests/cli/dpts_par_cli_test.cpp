@@ -474,11 +474,11 @@ TEST_CASE("a netCDF-4 DEM read by worker threads prints no HDF5 error stack", "[
   test::write_raster(dem, test::make_grid(60, 50, [](int c, int r) { return 100.0 + c + r; }), nc);
   for (const std::string algo : {"qem", "vp-meta"}) {
     INFO(algo);
-    const auto r =
-        test::run(kExe, {"--algo", algo, "--threads", "2", dem, (dir / "o.ply").string()});
+    // Quiet: nothing of ours on stderr (no progress either, however slow the build).
+    const auto r = test::run(
+        kExe, {"--quiet", "--algo", algo, "--threads", "2", dem, (dir / "o.ply").string()});
     CHECK(r.exit_code == 0);
-    CHECK(r.err.find("HDF5") == std::string::npos);
-    CHECK(count_lines(r.err) == 1);
+    CHECK(r.err.empty());
   }
 }
 
