@@ -2,7 +2,8 @@
 // (a TIFF, or anything GDAL may recognise) or, more often, a small raster described by the
 // bytes: size, cell type, geotransform and CRS variant, no-data, then the cells. It is written
 // as a GeoTIFF to GDAL's /vsimem/ and goes where dpts-par takes it: open_dem, the whole-DEM
-// elimination (VP) with its grid TIN, and the streaming meta engine (VP') on several pieces.
+// elimination (VP) with its grid TIN, the streaming meta engine (VP') on several pieces, and
+// the default mode, qem's piece engine (its TIN checked for folds).
 // Refusals (InputError, IoError) are answers; any other exception or crash is a finding.
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
@@ -14,8 +15,10 @@
 #include <vector>
 
 #include "core/errors.hpp"
+#include "core/mesh_check.hpp"
 #include "io/dem_reader.hpp"
 #include "parallel/meta.hpp"
+#include "parallel/qem_engine.hpp"
 #include "parallel/simplify.hpp"
 
 namespace {
@@ -127,6 +130,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     meta.levels = 2;
     meta.tile_bytes = 1 << 12;
     par::simplify_meta(info, meta, nullptr);
+    // The default mode, qem's piece engine, alone and with --max-error: its TIN must be valid
+    // (a fold or a flat face is a finding, as a crash is).
+    for (const double bound : {0.0, 1.0}) {
+      par::QemEngineOptions qo;
+      qo.keep.percent = 30.0;
+      qo.levels = 2;
+      qo.tile_bytes = 1 << 12;
+      qo.max_error = bound;
+      const core::TriMesh m = par::simplify_qem(info, qo, nullptr);
+      const core::MeshCheck mc = core::check_mesh(core::xy_of(m.xyz), m.faces);
+      if (mc.clockwise_or_flat != 0 || mc.bad_edges != 0) __builtin_trap();
+    }
   } catch (const InputError&) {
   } catch (const IoError&) {
   }
