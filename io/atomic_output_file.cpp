@@ -32,6 +32,26 @@ bool names_descriptor(const fs::path& path) {
   return false;
 }
 
+// The path a link (even a dangling one, or a chain of them) leads to; a path that is no link
+// is its own. The output goes there, the link stays.
+fs::path follow_links(fs::path path) {
+  std::error_code ec;
+  for (int hops = 0; hops < 40 && fs::is_symlink(fs::symlink_status(path, ec)); ++hops) {
+    const fs::path target = fs::read_symlink(path, ec);
+    if (ec) break;
+    path = target.is_absolute() ? target : path.parent_path() / target;
+  }
+  return path;
+}
+
+// The temporary name's start, before mkstemp's 6 characters: 16 bytes longer than the
+// output's name in all, so a name near the limit of 255 (NAME_MAX) is cut for it.
+std::string temp_prefix(const fs::path& final_path) {
+  std::string base = final_path.filename().string();
+  if (base.size() > 255 - 16) base.resize(255 - 16);
+  return "." + base + ".partial-";
+}
+
 }  // namespace
 
 bool AtomicOutputFile::streams_to(const fs::path& final_path) {
@@ -41,27 +61,9 @@ bool AtomicOutputFile::streams_to(const fs::path& final_path) {
                  (names_descriptor(final_path) && fs::is_regular_file(st)));
 }
 
-namespace {
-
-// The temporary name's start, before mkstemp's 6 characters: 16 bytes longer than the
-// output's name in all, so a name near the limit of 255 (NAME_MAX) is cut for it.
-std::string temp_prefix(const std::filesystem::path& final_path) {
-  std::string base = final_path.filename().string();
-  if (base.size() > 255 - 16) base.resize(255 - 16);
-  return "." + base + ".partial-";
-}
-
-}  // namespace
-
-int AtomicOutputFile::remove_leftovers(const std::filesystem::path& final_path) {
-  namespace fs = std::filesystem;
+int AtomicOutputFile::remove_leftovers(const fs::path& final_path) {
   std::error_code ec;
-  fs::path target = final_path;
-  for (int hops = 0; hops < 40 && fs::is_symlink(fs::symlink_status(target, ec)); ++hops) {
-    const fs::path next = fs::read_symlink(target, ec);
-    if (ec) break;
-    target = next.is_absolute() ? next : target.parent_path() / next;
-  }
+  const fs::path target = follow_links(final_path);
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
   const std::string prefix = temp_prefix(target);
   int removed = 0;
@@ -96,13 +98,8 @@ AtomicOutputFile::AtomicOutputFile(fs::path final_path) : final_(std::move(final
   if (fs::is_block_file(st)) {
     throw IoError(final_.string() + ": is a block device; refusing to write to it");
   }
-  // A link (even a dangling one): the output goes where it points, the link stays.
-  for (int hops = 0; hops < 40 && fs::is_symlink(fs::symlink_status(final_, ec)); ++hops) {
-    const fs::path target = fs::read_symlink(final_, ec);
-    if (ec) break;
-    final_ = target.is_absolute() ? target : final_.parent_path() / target;
-  }
-  const auto dir = final_.has_parent_path() ? final_.parent_path() : std::filesystem::path(".");
+  final_ = follow_links(final_);
+  const auto dir = final_.has_parent_path() ? final_.parent_path() : fs::path(".");
   std::string pattern = (dir / (temp_prefix(final_) + "XXXXXX")).string();
   std::vector<char> name(pattern.begin(), pattern.end());
   name.push_back('\0');
