@@ -112,14 +112,14 @@ std::vector<std::string> TempDir::files() const {
   return names;
 }
 
-namespace {
-std::string slurp(const std::filesystem::path& p) {
+namespace {}  // namespace
+
+std::string file_bytes(const std::filesystem::path& p) {
   std::ifstream in(p, std::ios::binary);
   std::ostringstream ss;
   ss << in.rdbuf();
   return ss.str();
 }
-}  // namespace
 
 RunResult run(const std::string& exe, const std::vector<std::string>& args,
               const RunOptions& options) {
@@ -171,7 +171,7 @@ RunResult run(const std::string& exe, const std::vector<std::string>& args,
       const double t =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       if (!sent && ((!options.signal_when.empty() &&
-                     slurp(err_path).find(options.signal_when) != std::string::npos) ||
+                     file_bytes(err_path).find(options.signal_when) != std::string::npos) ||
                     (options.signal_after_s > 0 && t >= options.signal_after_s))) {
         ::kill(pid, options.signal);
         sent = true;
@@ -187,8 +187,8 @@ RunResult run(const std::string& exe, const std::vector<std::string>& args,
     ::waitpid(pid, &status, 0);
   }
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  r.out = slurp(out_path);
-  r.err = slurp(err_path);
+  r.out = file_bytes(out_path);
+  r.err = file_bytes(err_path);
   // A child that crashed or aborted (a sanitizer's report, std::terminate) says why on its
   // stderr, which the tests do not print: shown here so that a CI log holds it.
   const int sig = WIFSIGNALED(status) ? WTERMSIG(status) : 0;

@@ -61,6 +61,9 @@ struct RunOptions {
   int cpu_limit_s = 0;  // RLIMIT_CPU's soft limit (0: none): SIGXCPU kills past it (no core)
 };
 
+// A file's bytes ("" when it cannot be read); a FIFO is read to its end.
+std::string file_bytes(const std::filesystem::path& path);
+
 // Runs an executable with arguments (no shell), capturing stdout and stderr.
 RunResult run(const std::string& exe, const std::vector<std::string>& args,
               const RunOptions& options = {});

@@ -21,13 +21,6 @@ namespace {
 
 const std::string kExe = DPTS_PAR_EXE;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 std::string field(const std::string& json, const std::string& key) {
   return io::json_field(json, key).value_or("<missing " + key + ">");
 }
@@ -79,7 +72,7 @@ TEST_CASE("a run report describes the run, the output's sha256, and a failure", 
   const auto r = test::run(kExe, {"--algo", "vp-meta", "--levels", "2", "--report",
                                   report.string(), (dir / "dem1.tif").string(), out.string()});
   REQUIRE(r.exit_code == 0);
-  const std::string json = slurp(report);
+  const std::string json = test::file_bytes(report);
   CHECK(field(json, "status") == "ok");
   CHECK(field(json, "exit_code") == "0");
   CHECK(field(json, "dpts_version") == DPTS_VERSION);
@@ -101,7 +94,7 @@ TEST_CASE("a run report describes the run, the output's sha256, and a failure", 
   const auto bad = test::run(kExe, {"--report", report.string(), (dir / "broken.tif").string(),
                                     out.string()});
   CHECK(bad.exit_code == 1);
-  const std::string failed = slurp(report);
+  const std::string failed = test::file_bytes(report);
   CHECK(field(failed, "status") == "failed");
   CHECK(field(failed, "exit_code") == "1");
   CHECK(field(failed, "error").find("broken.tif: not a raster GDAL can read") != std::string::npos);
@@ -116,31 +109,31 @@ TEST_CASE("a batch records the broken input, goes on, and resumes without redoin
                                          (dir / "out").string(), "--algo", "vp"};
   const auto first = test::run(kExe, args);
   CHECK(first.exit_code == 1);  // one input failed
-  const std::string summary = slurp(dir / "out" / "batch-summary.json");
+  const std::string summary = test::file_bytes(dir / "out" / "batch-summary.json");
   CHECK(field(summary, "inputs") == "4");
   CHECK(field(summary, "ok") == "3");
   CHECK(field(summary, "failed") == "1");
   CHECK(field(summary, "failures").find("broken.tif: not a raster GDAL can read") !=
         std::string::npos);
   for (int k = 0; k < 3; ++k) {
-    const auto report = slurp(dir / "out" / ("dem" + std::to_string(k) + ".json"));
+    const auto report = test::file_bytes(dir / "out" / ("dem" + std::to_string(k) + ".json"));
     CHECK(field(report, "status") == "ok");
     CHECK(field(field(report, "output"), "sha256") ==
           io::sha256_file((dir / "out" / ("dem" + std::to_string(k) + ".ply")).string()));
   }
-  CHECK(field(slurp(dir / "out" / "broken.json"), "status") == "failed");
+  CHECK(field(test::file_bytes(dir / "out" / "broken.json"), "status") == "failed");
   CHECK(first.err.find("[1/4] failed") != std::string::npos);
 
   // Again: the three are skipped, the broken one fails again.
   const auto second = test::run(kExe, args);
   CHECK(second.exit_code == 1);
-  const std::string again = slurp(dir / "out" / "batch-summary.json");
+  const std::string again = test::file_bytes(dir / "out" / "batch-summary.json");
   CHECK(field(again, "skipped") == "3");
   CHECK(field(again, "ok") == "0");
   // One output deleted: only that one is made again.
   fs::remove(dir / "out" / "dem1.ply");
   const auto third = test::run(kExe, args);
-  const std::string redo = slurp(dir / "out" / "batch-summary.json");
+  const std::string redo = test::file_bytes(dir / "out" / "batch-summary.json");
   CHECK(field(redo, "skipped") == "2");
   CHECK(field(redo, "ok") == "1");
   CHECK(fs::exists(dir / "out" / "dem1.ply"));
@@ -148,7 +141,7 @@ TEST_CASE("a batch records the broken input, goes on, and resumes without redoin
   std::vector<std::string> other = args;
   other.back() = "pld";
   test::run(kExe, other);
-  CHECK(field(slurp(dir / "out" / "batch-summary.json"), "ok") == "3");
+  CHECK(field(test::file_bytes(dir / "out" / "batch-summary.json"), "ok") == "3");
   // Once the broken input is gone, the batch succeeds.
   fs::remove(dir / "in" / "broken.tif");
   CHECK(test::run(kExe, other).exit_code == 0);
@@ -164,7 +157,7 @@ TEST_CASE("a batch folder's tables and vector files are not inputs", "[cli][batc
   const auto r = test::run(
       kExe, {"--batch", (dir / "in").string(), "--out-dir", (dir / "out").string(), "--quiet"});
   CHECK(r.exit_code == 0);
-  const std::string summary = slurp(dir / "out" / "batch-summary.json");
+  const std::string summary = test::file_bytes(dir / "out" / "batch-summary.json");
   CHECK(field(summary, "inputs") == "2");
   CHECK(field(summary, "ok") == "2");
   CHECK(field(summary, "failed") == "0");
@@ -213,7 +206,7 @@ TEST_CASE("a batch child killed mid-run leaves no temporary file, and the batch 
                             "--jobs", "1", "--threads", "2", "--quiet"},
                            ro);
   CHECK(r.exit_code == 1);
-  const std::string summary = slurp(dir / "out" / "batch-summary.json");
+  const std::string summary = test::file_bytes(dir / "out" / "batch-summary.json");
   CHECK(field(summary, "ok") == "1");
   CHECK(field(summary, "failed") == "1");
   CHECK(summary.find("dpts-par was killed by signal " + std::to_string(SIGXCPU)) !=
@@ -272,7 +265,7 @@ TEST_CASE("a batch killed by SIGTERM and run again gives the same outputs as one
   ro.signal_after_s = 60;
   const auto killed = batch("resumed", ro);
   CHECK(killed.exit_code == 1);
-  const std::string summary = slurp(dir / "resumed" / "batch-summary.json");
+  const std::string summary = test::file_bytes(dir / "resumed" / "batch-summary.json");
   CHECK(field(summary, "interrupted") == "true");
   CHECK(std::stoi(field(summary, "ok")) >= 1);
   for (const auto& entry : fs::directory_iterator(dir / "resumed")) {
@@ -280,7 +273,7 @@ TEST_CASE("a batch killed by SIGTERM and run again gives the same outputs as one
   }
   const auto resumed = batch("resumed");
   CHECK(resumed.exit_code == 0);
-  CHECK(std::stoi(field(slurp(dir / "resumed" / "batch-summary.json"), "skipped")) >= 1);
+  CHECK(std::stoi(field(test::file_bytes(dir / "resumed" / "batch-summary.json"), "skipped")) >= 1);
   for (int k = 0; k < kInputs; ++k) {
     const std::string name = "dem" + std::to_string(k) + ".ply";
     CHECK(io::sha256_file((dir / "whole" / name).string()) ==

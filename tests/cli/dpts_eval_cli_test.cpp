@@ -290,14 +290,12 @@ TEST_CASE("dpts-eval refuses a --pairs-out that is a file of the DEM's dataset",
   const std::string dem = (dir / "dem.envi").string(), hdr = (dir / "dem.hdr").string();
   test::write_raster(dem, test::make_grid(12, 10, [](int c, int r) { return 100.0 + c + r; }),
                      envi);
-  std::ifstream in(hdr);
-  const std::string before((std::istreambuf_iterator<char>(in)), {});
+  const std::string before = test::file_bytes(hdr);
   const auto r = test::run(kEval, {"--dem", dem, "--mesh", "m.ply", "--pairs-out", hdr});
   CHECK(r.exit_code == 2);
   CHECK(r.err.rfind("dpts-eval: --pairs-out " + hdr + ": is " + hdr + ", a file of the DEM\n", 0) ==
         0);
-  std::ifstream again(hdr);
-  CHECK(std::string((std::istreambuf_iterator<char>(again)), {}) == before);
+  CHECK(test::file_bytes(hdr) == before);
 }
 
 TEST_CASE("dpts-eval answers each bad sample-point file in one line and writes nothing",

@@ -1,6 +1,5 @@
 // dpts-par as users run it: exit codes, one-line messages, no output left on failure.
 #include <gdal_priv.h>
-#include <ogr_spatialref.h>
 #include <sys/stat.h>
 
 #include <catch2/catch.hpp>
@@ -22,15 +21,7 @@ namespace {
 
 const std::string kExe = DPTS_PAR_EXE;
 
-std::string utm_wkt() {
-  OGRSpatialReference srs;
-  srs.importFromEPSG(32611);
-  char* wkt = nullptr;
-  srs.exportToWkt(&wkt);
-  std::string out = wkt;
-  CPLFree(wkt);
-  return out;
-}
+std::string utm_wkt() { return test::epsg_wkt(32611); }
 
 // A small real-looking DEM with a void, in a fresh folder.
 struct Fixture {
@@ -44,6 +35,19 @@ struct Fixture {
     test::write_geotiff(dem, g, {400000, 10, 0, 3800000, 0, -10}, utm_wkt());
   }
 };
+
+// A smooth DEM of side x side cells of 10 m in UTM 11N, written to `path`: work enough for a
+// run that lasts (signals, progress, memory limits).
+std::string write_long_run_dem(const std::filesystem::path& path, int side) {
+  test::write_geotiff(
+      path,
+      test::make_grid(side, side,
+                      [](int c, int r) {
+                        return 500.0 + 40.0 * std::sin(c * 0.05) * std::cos(r * 0.07) + 0.1 * r;
+                      }),
+      {400000, 10, 0, 3800000, 0, -10}, utm_wkt());
+  return path.string();
+}
 
 int count_lines(const std::string& s) {
   int n = 0;
@@ -221,38 +225,20 @@ TEST_CASE("help and version exit 0 on stdout", "[cli]") {
 TEST_CASE("with stderr closed the output is the same bytes (no progress text in it)",
           "[cli][robust]") {
   test::TempDir dir;
-  const auto dem = (dir / "big.tif").string();
-  test::write_geotiff(
-      dem,
-      test::make_grid(500, 500,
-                      [](int c, int r) {
-                        return 500.0 + 40.0 * std::sin(c * 0.05) * std::cos(r * 0.07) + 0.1 * r;
-                      }),
-      {400000, 10, 0, 3800000, 0, -10}, test::epsg_wkt(32611));
-  auto bytes = [](const std::filesystem::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-  };
+  const auto dem = write_long_run_dem(dir / "big.tif", 500);
   const auto a = (dir / "a.ply").string(), b = (dir / "b.ply").string();
   // --verbose: the pieces' table and the stage times are printed while the output is open.
   REQUIRE(test::run(kExe, {"--verbose", "--threads", "1", dem, a}).exit_code == 0);
   test::RunOptions closed;
   closed.close_stderr = true;
   REQUIRE(test::run(kExe, {"--verbose", "--threads", "1", dem, b}, closed).exit_code == 0);
-  CHECK(bytes(a) == bytes(b));
+  CHECK(test::file_bytes(a) == test::file_bytes(b));
 }
 
 #if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)  // they reserve terabytes
 TEST_CASE("out of memory is one line naming the stage, and no output", "[cli][robust]") {
   test::TempDir dir;
-  const auto dem = (dir / "big.tif").string();
-  test::write_geotiff(
-      dem,
-      test::make_grid(1200, 1200,
-                      [](int c, int r) {
-                        return 500.0 + 40.0 * std::sin(c * 0.05) * std::cos(r * 0.07) + 0.1 * r;
-                      }),
-      {400000, 10, 0, 3800000, 0, -10}, test::epsg_wkt(32611));
+  const auto dem = write_long_run_dem(dir / "big.tif", 1200);
   test::RunOptions small;
   small.address_space_limit = std::size_t{250} << 20;  // vp needs about 460 MB here
   // --max-memory above the limit: the estimate lets it start, the allocation fails.
@@ -283,11 +269,7 @@ TEST_CASE("a report path naming the input or the output is refused before anythi
   Fixture fx;
   const auto out = (fx.dir / "out.ply").string();
   std::ofstream(out) << "precious";
-  auto bytes = [](const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-  };
-  const std::string dem_bytes = bytes(fx.dem);
+  const std::string dem_bytes = test::file_bytes(fx.dem);
   const auto r1 = test::run(kExe, {"--report", fx.dem, fx.dem, out});
   CHECK(r1.exit_code == 2);
   CHECK(r1.err.rfind("dpts-par: --report " + fx.dem + ": is the INPUT file; refusing", 0) == 0);
@@ -296,8 +278,8 @@ TEST_CASE("a report path naming the input or the output is refused before anythi
   const auto r2 = test::run(kExe, {"--report", other, fx.dem, out});
   CHECK(r2.exit_code == 2);
   CHECK(r2.err.rfind("dpts-par: --report " + other + ": is the OUTPUT file; refusing", 0) == 0);
-  CHECK(bytes(fx.dem) == dem_bytes);
-  CHECK(bytes(out) == "precious");
+  CHECK(test::file_bytes(fx.dem) == dem_bytes);
+  CHECK(test::file_bytes(out) == "precious");
   CHECK(fx.dir.files() == std::vector<std::string>{"dem.tif", "out.ply"});
 }
 
@@ -316,10 +298,6 @@ TEST_CASE("an output that is a link, a FIFO or a device is written through, neve
           "[cli][robust]") {
   Fixture fx;
   namespace fs = std::filesystem;
-  auto bytes = [](const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-  };
   SECTION("a link: the file appears at its target, the link stays") {
     fs::create_directory(fx.dir / "real");
     std::ofstream(fx.dir / "real" / "t.ply") << "old";
@@ -330,9 +308,10 @@ TEST_CASE("an output that is a link, a FIFO or a device is written through, neve
       const auto r = test::run(kExe, {"--quiet", fx.dem, (fx.dir / link).string()});
       CHECK(r.exit_code == 0);
       CHECK(fs::is_symlink(fx.dir / link));
-      CHECK(bytes(fx.dir / link).rfind("ply\n", 0) == 0);
+      CHECK(test::file_bytes(fx.dir / link).rfind("ply\n", 0) == 0);
     }
-    CHECK(bytes(fx.dir / "real" / "t.ply") == bytes(fx.dir / "real" / "new.ply"));
+    CHECK(test::file_bytes(fx.dir / "real" / "t.ply") ==
+          test::file_bytes(fx.dir / "real" / "new.ply"));
     CHECK(fx.dir.files() ==
           std::vector<std::string>{"dangling.ply", "dem.tif", "link.ply", "real"});
   }
@@ -340,14 +319,14 @@ TEST_CASE("an output that is a link, a FIFO or a device is written through, neve
     const auto fifo = fx.dir / "pipe.ply";
     REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
     std::string got;
-    std::thread reader([&] { got = bytes(fifo); });
+    std::thread reader([&] { got = test::file_bytes(fifo); });
     const auto r = test::run(kExe, {"--quiet", fx.dem, fifo.string()});
     reader.join();
     CHECK(r.exit_code == 0);
     CHECK(fs::is_fifo(fifo));
     const auto file = (fx.dir / "file.ply").string();
     REQUIRE(test::run(kExe, {"--quiet", fx.dem, file}).exit_code == 0);
-    CHECK(got == bytes(file));
+    CHECK(got == test::file_bytes(file));
   }
   SECTION("/dev/null stays a device") {
     CHECK(test::run(kExe, {"--quiet", fx.dem, "/dev/null"}).exit_code == 0);
@@ -409,10 +388,6 @@ TEST_CASE("an output name of 255 bytes is written, and a replaced output keeps i
 TEST_CASE("an OUTPUT or --report that is any file of the input dataset is refused, unchanged",
           "[cli][robust]") {
   Fixture fx;
-  const auto bytes = [](const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-  };
   // An ENVI raster: its .hdr is one of its files.
   test::RasterSpec envi;
   envi.driver = "ENVI";
@@ -433,7 +408,7 @@ TEST_CASE("an OUTPUT or --report that is any file of the input dataset is refuse
   // A zip holding dem.tif, read through /vsizip/: the zip is the file behind it.
   const std::string zip = (fx.dir / "dems.zip").string();
   {
-    const std::string tif = bytes(fx.dem);
+    const std::string tif = test::file_bytes(fx.dem);
     VSILFILE* f = VSIFOpenL(("/vsizip/" + zip + "/dem.tif").c_str(), "wb");
     REQUIRE(f != nullptr);
     REQUIRE(VSIFWriteL(tif.data(), 1, tif.size(), f) == tif.size());
@@ -445,7 +420,7 @@ TEST_CASE("an OUTPUT or --report that is any file of the input dataset is refuse
   for (const Case& c : {Case{raw, hdr}, Case{vrt, fx.dem}, Case{"/vsizip/" + zip + "/dem.tif", zip},
                         Case{"/vsizip/{" + zip + "}/dem.tif", zip}}) {
     INFO(c.input << " over " << c.victim);
-    const std::string before = bytes(c.victim);
+    const std::string before = test::file_bytes(c.victim);
     auto r = test::run(kExe, {c.input, c.victim});
     CHECK(r.exit_code == 2);
     CHECK(r.err.rfind("dpts-par: " + c.victim + ": OUTPUT is ", 0) == 0);
@@ -454,7 +429,7 @@ TEST_CASE("an OUTPUT or --report that is any file of the input dataset is refuse
     r = test::run(kExe, {"--report", c.victim, c.input, out});
     CHECK(r.exit_code == 2);
     CHECK(r.err.rfind("dpts-par: " + c.victim + ": --report names ", 0) == 0);
-    CHECK(bytes(c.victim) == before);
+    CHECK(test::file_bytes(c.victim) == before);
     CHECK_FALSE(std::filesystem::exists(out));
   }
   // The same input to a new file still runs.
@@ -504,8 +479,7 @@ TEST_CASE("a dash as INPUT reads standard input, as OUTPUT writes standard outpu
   const auto body = [](const std::string& ply) { return ply.substr(ply.find("end_header")); };
   const auto file = (dir / "file.ply").string();
   REQUIRE(test::run(kExe, {"--quiet", dem, file}).exit_code == 0);
-  std::ifstream in(file, std::ios::binary);
-  const std::string expected((std::istreambuf_iterator<char>(in)), {});
+  const std::string expected = test::file_bytes(file);
   test::RunOptions ro;
   ro.stdin_from = dem;
   const auto r = test::run(kExe, {"--quiet", "--threads", "2", "-", "-"}, ro);
@@ -528,13 +502,7 @@ TEST_CASE("a dash as INPUT reads standard input, as OUTPUT writes standard outpu
 
 TEST_CASE("SIGPIPE (a reader of stderr gone) does not kill a run", "[cli][robust]") {
   test::TempDir dir;
-  const auto dem = (dir / "dem.tif").string();
-  test::write_geotiff(
-      dem,
-      test::make_grid(
-          1500, 1500,
-          [](int c, int r) { return 500.0 + 40.0 * std::sin(c * 0.05) * std::cos(r * 0.07); }),
-      {400000, 10, 0, 3800000, 0, -10}, utm_wkt());
+  const auto dem = write_long_run_dem(dir / "dem.tif", 1500);
   const auto out = (dir / "out.ply").string();
   test::RunOptions ro;
   ro.signal = SIGPIPE;
@@ -550,14 +518,7 @@ TEST_CASE(
     "SIGTERM, SIGINT and SIGHUP stop a long run promptly, leaving no output and no temporary file",
     "[cli][robust]") {
   test::TempDir dir;
-  const auto dem = (dir / "big.tif").string();
-  test::write_geotiff(
-      dem,
-      test::make_grid(1300, 1300,
-                      [](int c, int r) {
-                        return 500.0 + 40.0 * std::sin(c * 0.05) * std::cos(r * 0.07) + 0.1 * r;
-                      }),
-      {400000, 10, 0, 3800000, 0, -10}, test::epsg_wkt(32611));
+  const auto dem = write_long_run_dem(dir / "big.tif", 1300);
   const auto out = (dir / "out.ply").string();
   std::ofstream(out) << "precious";  // an older result: must survive the interrupted run
   struct Case {
@@ -580,9 +541,7 @@ TEST_CASE(
     const auto r =
         test::run(kExe, {"--algo", algo, "--threads", "2", "--report", report, dem, out}, ro);
     CHECK(r.exit_code == 1);
-    std::ifstream rj(report);
-    const std::string json((std::istreambuf_iterator<char>(rj)), {});
-    CHECK(io::json_field(json, "status") == "interrupted");
+    CHECK(io::json_field(test::file_bytes(report), "status") == "interrupted");
     CHECK(r.err.find("dpts-par: interrupted; no output written") != std::string::npos);
     // Promptly: checked between removals and strips (0.2 s measured; sanitizers are slower).
     CHECK(r.seconds_after_signal >= 0);
