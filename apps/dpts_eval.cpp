@@ -276,9 +276,11 @@ int run(const Options& o) {
   const io::Dem dem = io::read_dem(o.dem, io::DemReadOptions{o.t_srs}, nullptr);
   // Nor may --pairs-out overwrite any file of the DEM's dataset (an ENVI .hdr, a VRT's
   // source, the zip behind /vsizip/).
-  for (const std::string& f : dem.files) {
-    if (!o.pairs_out.empty() && dpts::cli::same_file(o.pairs_out, f)) {
-      throw UsageError("--pairs-out " + o.pairs_out + ": is " + f + ", a file of the DEM");
+  if (!o.pairs_out.empty()) {
+    for (const std::string& f : dem.files) {
+      if (dpts::cli::same_file(o.pairs_out, f)) {
+        throw UsageError("--pairs-out " + o.pairs_out + ": is " + f + ", a file of the DEM");
+      }
     }
   }
 
