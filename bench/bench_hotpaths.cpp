@@ -5,6 +5,10 @@
 //                            its link, from the full TIN down to 10 % (VP): removals/s
 //   BM_piece_value           the value of one 4096-cell piece (20 points, 190 pairs of Steiner
 //                            geodesics): pieces/s and pairs/s
+//   BM_grid_mesh             the DEM's full-resolution grid TIN (the kernels' input): cells/s,
+//                            and per_Mcell: seconds per million cells (= us per cell)
+//   BM_qem_simplify          qem's quadric edge collapse of that TIN to 10 %: cells/s and
+//                            per_Mcell (the kernel of dpts-par's default mode, without I/O)
 // (BM_dijkstra_one_source, in bench_geodesic.cpp, is the Steiner-graph Dijkstra per source.)
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
@@ -14,6 +18,7 @@
 
 #include "bench_support.hpp"
 #include "core/elimination.hpp"
+#include "core/qem.hpp"
 #include "io/dem_reader.hpp"
 #include "parallel/meta.hpp"
 
@@ -78,5 +83,34 @@ void BM_piece_value(benchmark::State& state) {
       benchmark::Counter(190.0 * state.iterations(), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_piece_value)->Unit(benchmark::kMillisecond);
+
+void cell_counters(benchmark::State& state, std::size_t cells) {
+  const double total = static_cast<double>(cells) * static_cast<double>(state.iterations());
+  state.counters["cells/s"] = benchmark::Counter(total, benchmark::Counter::kIsRate);
+  state.counters["per_Mcell"] =
+      benchmark::Counter(total / 1e6, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+void BM_grid_mesh(benchmark::State& state) {
+  const dpts::io::Dem* dem = load();
+  if (!dem) return state.SkipWithError(("cannot read " + dpts::bench::shared_path(kDem)).c_str());
+  for (auto _ : state) benchmark::DoNotOptimize(dem->grid_mesh());
+  cell_counters(state, dem->valid_cells);
+}
+BENCHMARK(BM_grid_mesh)->Unit(benchmark::kMillisecond);
+
+void BM_qem_simplify(benchmark::State& state) {
+  const dpts::io::Dem* dem = load();
+  if (!dem) return state.SkipWithError(("cannot read " + dpts::bench::shared_path(kDem)).c_str());
+  const dpts::core::TriMesh mesh = dem->grid_mesh();
+  for (auto _ : state) {
+    state.PauseTiming();
+    dpts::core::TriMesh copy = mesh;
+    state.ResumeTiming();
+    benchmark::DoNotOptimize(dpts::core::qem_simplify(std::move(copy), mesh.vertex_count() / 10));
+  }
+  cell_counters(state, mesh.vertex_count());
+}
+BENCHMARK(BM_qem_simplify)->Unit(benchmark::kMillisecond);
 
 }  // namespace
