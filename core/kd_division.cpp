@@ -54,8 +54,9 @@ std::vector<Piece> kd_divide(const BlockCounts& bc, const DivisionOptions& optio
     const std::size_t n = count(r);
     if (n == 0) continue;
     const Piece piece = to_piece(r, n);
-    const bool want =
-        item.depth < options.levels || piece_bytes(piece, options.halo) > options.budget_bytes;
+    const bool want = item.depth < options.levels ||
+                      piece_bytes(piece, options.halo) > options.budget_bytes ||
+                      (options.max_vertices > 0 && n > options.max_vertices);
     const int nx = r.bx1 - r.bx0, ny = r.by1 - r.by0;
     if (!want || (nx < 2 && ny < 2)) {
       out.push_back(piece);

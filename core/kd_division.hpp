@@ -31,6 +31,7 @@ struct DivisionOptions {
   int levels = 4;                         // at least 2^levels pieces where the blocks allow
   std::size_t budget_bytes = 256 << 20;   // a piece's estimated working set must fit
   int halo = 8;                           // context cells round a piece (counted in its memory)
+  std::size_t max_vertices = 0;           // a piece with more surface vertices splits (0: any)
   double col_metres = 1, row_metres = 1;  // cell size, to split across the longer side
 };
 

@@ -307,7 +307,8 @@ double piece_value(const core::HeightGrid& window, int col0, int row0, const cor
 
 std::vector<core::Piece> divide_dem(const io::DemInfo& dem, const KeepTarget& keep, int levels,
                                     std::size_t tile_bytes, int halo,
-                                    const core::Progress& progress, MetaStats& st) {
+                                    const core::Progress& progress, MetaStats& st,
+                                    std::size_t max_vertices) {
   auto t0 = std::chrono::steady_clock::now();
   const core::BlockCounts bc = count_blocks(dem, std::max<std::size_t>(tile_bytes / 4, 1 << 20),
                                             progress, &st.valid_cells, &st.absurd_cells);
@@ -320,6 +321,7 @@ std::vector<core::Piece> divide_dem(const io::DemInfo& dem, const KeepTarget& ke
   div.levels = levels;
   div.budget_bytes = tile_bytes;
   div.halo = halo;
+  div.max_vertices = max_vertices;
   const core::GridFrame& f = dem.frame;
   div.col_metres = f.metres_per_unit * std::hypot(f.m[0][0], f.m[1][0]);
   div.row_metres = f.metres_per_unit * std::hypot(f.m[0][1], f.m[1][1]);

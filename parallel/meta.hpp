@@ -74,11 +74,13 @@ MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
 
 // The piece engines' first stage: one streaming count of surface vertices per block (in
 // strips of about tile_bytes / 4), then the k-d division into pieces that fit tile_bytes with
-// `halo` cells of context. Fills st's counts, block, count_s, target (from keep) and pieces.
+// `halo` cells of context (and hold at most max_vertices surface vertices, 0: any). Fills st's
+// counts, block, count_s, target (from keep) and pieces.
 // Throws InputError when the DEM has no valid cell or fewer than 3 surface vertices.
 std::vector<core::Piece> divide_dem(const io::DemInfo& dem, const KeepTarget& keep, int levels,
                                     std::size_t tile_bytes, int halo,
-                                    const core::Progress& progress, MetaStats& st);
+                                    const core::Progress& progress, MetaStats& st,
+                                    std::size_t max_vertices = 0);
 
 // Pieces simplified at once: as many as there are threads, at most all of them.
 std::size_t pieces_in_flight(std::size_t pieces);
