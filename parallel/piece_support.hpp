@@ -37,8 +37,18 @@ inline core::HeightGrid read_window(const io::DemInfo& dem, int col0, int row0, 
 // (a piece's triangulation is freed in thousands of blocks) for reuse; as kept-vertex outputs
 // accumulate between pieces, that retained memory fragments and the process grows with the
 // DEM although no more is live. Trimming after each piece keeps the footprint flat.
+// note: not under AddressSanitizer or ThreadSanitizer: they replace malloc, and glibc's
+// malloc_trim then walks an arena it never set up (SEGV in mtrim, seen under ASan once the qem
+// engine made more pieces).
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define DPTS_SANITIZED_MALLOC 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#define DPTS_SANITIZED_MALLOC 1
+#endif
+#endif
 inline void release_free_memory() {
-#ifdef __GLIBC__
+#if defined(__GLIBC__) && !defined(DPTS_SANITIZED_MALLOC)
   malloc_trim(0);
 #endif
 }
