@@ -20,7 +20,9 @@ trap 'rm -rf "$tmp"' EXIT
 threads=()
 for ((t = 1; t < max; t *= 2)); do threads+=("$t"); done
 threads+=("$max")
-res=$(gdalinfo "$dem" | awk -F'[(,)]' '/^Pixel Size/ {print ($2 < 0 ? -$2 : $2)}')
+# shellcheck source=bench/timing.sh
+source "$root/bench/timing.sh"
+res=$(raster_cell_size "$dem")
 inputs=("$dem")
 for f in 2 4; do
   gdalwarp -q -r cubic -tr "$(awk -v r="$res" -v f="$f" 'BEGIN {print r / f}')" \
@@ -28,27 +30,15 @@ for f in 2 4; do
   inputs+=("$tmp/x$f.tif")
 done
 
-median() { sort -g | awk '{v[NR] = $1} END {print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2}'; }
-
 echo "# $dem and 2 resampled sizes; ${runs} run(s) each; $(nproc) cores; dpts-par $*"
 echo "cells,threads,wall_s,cpu_s,us_per_cell,peak_rss_mb,speedup" | tee "$tmp/csv"
 for input in "${inputs[@]}"; do
-  cells=$(gdalinfo "$input" | awk '/^Size is/ {gsub(",", ""); print $3 * $4}')
+  cells=$(raster_cells "$input")
   base=
   for t in "${threads[@]}"; do
-    : > "$tmp/times"
-    for ((r = 0; r < runs; ++r)); do
-      /usr/bin/time -f "%e %U %S %M" -o "$tmp/time" "$build/dpts-par" --quiet --threads "$t" "$@" \
-        "$input" "$tmp/out.ply"
-      cat "$tmp/time" >> "$tmp/times"
-    done
-    wall=$(awk '{print $1}' "$tmp/times" | median)
-    cpu=$(awk '{print $2 + $3}' "$tmp/times" | median)
-    rss=$(awk '{print $4}' "$tmp/times" | median)
+    timed "$build/dpts-par" --quiet --threads "$t" "$@" "$input" "$tmp/out.ply"
     base=${base:-$wall}
-    awk -v n="$cells" -v t="$t" -v w="$wall" -v c="$cpu" -v r="$rss" -v b="$base" \
-      'BEGIN {printf "%d,%d,%.2f,%.2f,%.2f,%.0f,%.2f\n", n, t, w, c, c * 1e6 / n, r / 1024, b / w}' |
-      tee -a "$tmp/csv"
+    timed_row "$cells" "$t" "$cells" "$base" | tee -a "$tmp/csv"
   done
 done
 

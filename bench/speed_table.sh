@@ -15,29 +15,11 @@ keep=${2:-10}
 runs=${RUNS:-3}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-read -r width height < <(gdalinfo "$dem" | awk '/^Size is/ {gsub(",", ""); print $3, $4}')
-cells=$((width * height))
+# shellcheck source=bench/timing.sh
+source "$root/bench/timing.sh"
+cells=$(raster_cells "$dem")
 echo "# $dem: $cells cells, keep $keep %, $runs runs, $(nproc) cores"
 echo "tool,threads,wall_s,cpu_s,us_per_cell,peak_rss_mb,speedup"
-
-median() { sort -g | awk '{v[NR] = $1} END {print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2}'; }
-
-# Runs "$@" RUNS times under /usr/bin/time; sets wall, cpu, rss (medians).
-timed() {
-  : > "$tmp/times"
-  for ((r = 0; r < runs; ++r)); do
-    /usr/bin/time -f "%e %U %S %M" -o "$tmp/time" "$@" > /dev/null
-    cat "$tmp/time" >> "$tmp/times"
-  done
-  wall=$(awk '{print $1}' "$tmp/times" | median)
-  cpu=$(awk '{print $2 + $3}' "$tmp/times" | median)
-  rss=$(awk '{print $4}' "$tmp/times" | median)
-}
-
-row() {  # tool threads base_wall
-  awk -v tool="$1" -v t="$2" -v w="$wall" -v c="$cpu" -v r="$rss" -v n="$cells" -v base="$3" \
-    'BEGIN {printf "%s,%d,%.2f,%.2f,%.2f,%.0f,%.2f\n", tool, t, w, c, c * 1e6 / n, r / 1024, base / w}'
-}
 
 for mode in ${MODES:-qem vp vp-meta pld-meta qslim}; do
   base=
@@ -45,17 +27,17 @@ for mode in ${MODES:-qem vp vp-meta pld-meta qslim}; do
     timed "$build/dpts-par" --quiet --threads "$t" --algo "$mode" --keep "$keep%" "$dem" \
       "$tmp/$mode.ply"
     base=${base:-$wall}
-    row "dpts $mode" "$t" "$base"
+    timed_row "dpts $mode" "$t" "$cells" "$base"
   done
 done
 
 if [[ -n "${HMM:-}" ]]; then
   # hmm reads a 16-bit grey PNG: heights scaled to 0-65535, z scale = height range in cells.
   read -r lo hi < <(gdalinfo -mm "$dem" | awk -F'[=,]' '/Computed Min\/Max/ {print $2, $3}')
-  cell=$(gdalinfo "$dem" | awk -F'[(,)]' '/^Pixel Size/ {print ($2 < 0 ? -$2 : $2)}')
+  cell=$(raster_cell_size "$dem")
   gdal_translate -q -ot UInt16 -scale "$lo" "$hi" 0 65535 -of PNG "$dem" "$tmp/dem.png"
   zscale=$(awk -v lo="$lo" -v hi="$hi" -v c="$cell" 'BEGIN {print (hi - lo) / c}')
   points=$((cells * keep / 100))
   timed "$HMM" -q -z "$zscale" -p "$points" -e 0 "$tmp/dem.png" "$tmp/hmm.stl"
-  row "hmm" 1 "$wall"
+  timed_row "hmm" 1 "$cells" "$wall"
 fi
