@@ -23,6 +23,13 @@ bool same_file(const std::string& a, const std::string& b) {
   if (std::filesystem::exists(b, ec) && std::filesystem::equivalent(a, b, ec)) return true;
   return std::filesystem::weakly_canonical(a, ec) == std::filesystem::weakly_canonical(b, ec);
 }
+const std::string* same_file_in(const std::string& path, const std::vector<std::string>& files) {
+  for (const std::string& f : files) {
+    if (same_file(path, f)) return &f;
+  }
+  return nullptr;
+}
+
 void reopen_closed_std_streams() {
   for (int fd = 0; fd <= 2; ++fd) {
     if (::fcntl(fd, F_GETFD) != -1 || errno != EBADF) continue;

@@ -67,6 +67,10 @@ T parse_number(const std::string& flag, const std::string& text, T min, const ch
 // outputs must not overwrite inputs.
 bool same_file(const std::string& a, const std::string& b);
 
+// The first of `files` (a dataset's, io::DemInfo::files) that `path` names, or null: an output
+// there would overwrite the input.
+const std::string* same_file_in(const std::string& path, const std::vector<std::string>& files);
+
 // Standard streams the caller closed (2>&-) reopened on /dev/null, before any file is opened:
 // otherwise an output file could get descriptor 2 and progress text would land in it.
 void reopen_closed_std_streams();

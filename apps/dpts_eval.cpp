@@ -276,12 +276,9 @@ int run(const Options& o) {
   const io::Dem dem = io::read_dem(o.dem, io::DemReadOptions{o.t_srs}, nullptr);
   // Nor may --pairs-out overwrite any file of the DEM's dataset (an ENVI .hdr, a VRT's
   // source, the zip behind /vsizip/).
-  if (!o.pairs_out.empty()) {
-    for (const std::string& f : dem.files) {
-      if (dpts::cli::same_file(o.pairs_out, f)) {
-        throw UsageError("--pairs-out " + o.pairs_out + ": is " + f + ", a file of the DEM");
-      }
-    }
+  if (const std::string* f =
+          o.pairs_out.empty() ? nullptr : dpts::cli::same_file_in(o.pairs_out, dem.files)) {
+    throw UsageError("--pairs-out " + o.pairs_out + ": is " + *f + ", a file of the DEM");
   }
 
   // T: the DEM's full-resolution grid TIN, in the output CRS dpts-par uses.

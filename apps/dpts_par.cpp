@@ -52,16 +52,14 @@ dpts::cli::RunReport g_report;  // --report: filled as the run goes, written by 
 dpts::io::DemInfo open_input(const dpts::cli::ParOptions& o) {
   using namespace dpts;
   io::DemInfo dem = io::open_dem(o.input, read_options(o));
-  for (const std::string& f : dem.files) {
-    if (cli::same_file(o.output, f)) {
-      throw UsageError(o.output + ": OUTPUT is " + f +
-                       ", a file of the INPUT dataset; refusing to overwrite it");
-    }
-    if (!o.report.empty() && cli::same_file(o.report, f)) {
-      g_report.path.clear();  // nor is the failure written there
-      throw UsageError(o.report + ": --report names " + f +
-                       ", a file of the INPUT dataset; refusing to overwrite it");
-    }
+  if (const std::string* f = cli::same_file_in(o.output, dem.files)) {
+    throw UsageError(o.output + ": OUTPUT is " + *f +
+                     ", a file of the INPUT dataset; refusing to overwrite it");
+  }
+  if (const std::string* f = o.report.empty() ? nullptr : cli::same_file_in(o.report, dem.files)) {
+    g_report.path.clear();  // nor is the failure written there
+    throw UsageError(o.report + ": --report names " + *f +
+                     ", a file of the INPUT dataset; refusing to overwrite it");
   }
   return dem;
 }
