@@ -70,6 +70,9 @@ dpts::io::Dem read_whole_dem(const dpts::cli::ParOptions& o, std::size_t bytes_p
                              const dpts::core::Progress& progress) {
   using namespace dpts;
   io::DemInfo info = open_input(o);
+  io::check_whole_size(info, "--algo " + o.algo_text +
+                                 " (the whole DEM in memory); the default --algo qem reads it in "
+                                 "tiles");
   const double need = static_cast<double>(info.cell_count()) * bytes_per_cell;
   const std::size_t limit = cli::memory_limit_bytes(o);
   if (need > static_cast<double>(limit)) {
@@ -77,7 +80,7 @@ dpts::io::Dem read_whole_dem(const dpts::cli::ParOptions& o, std::size_t bytes_p
                      std::to_string(info.height) + " cells need about " + par::format_bytes(need) +
                      " with --algo " + o.algo_text + " (the whole DEM in memory), more than the " +
                      par::format_bytes(static_cast<double>(limit)) +
-                     " available; --algo vp-meta or pld-meta reads it in tiles");
+                     " available; the default --algo qem (or vp-meta, pld-meta) reads it in tiles");
   }
   return io::read_dem(std::move(info), progress);
 }
@@ -315,6 +318,8 @@ int run_meta(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer
              const dpts::core::Progress& progress, std::chrono::steady_clock::time_point start) {
   using namespace dpts;
   io::DemInfo dem = open_input(o);
+  io::check_whole_size(dem, "--algo " + o.algo_text +
+                                " (32-bit cell ids); the default --algo qem reads it in tiles");
   print_notes(dem, o);
   io::AtomicOutputFile out(o.output);
   const std::size_t tile_bytes = piece_cache(o);

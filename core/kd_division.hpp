@@ -42,9 +42,9 @@ inline constexpr std::size_t kBytesPerVertex = 320;
 std::size_t piece_bytes(const Piece& piece, int halo);
 
 // Splits the raster recursively, across its longer side in metres, at the block line that
-// best halves the surface vertices, until every piece is `levels` deep and fits the budget
-// (or is a single block). Pieces with no surface vertex are dropped. Deterministic; pieces
-// come in k-d order.
+// best halves the surface vertices, until every piece is `levels` deep, fits the budget and
+// has a window (with its halo) of fewer than 2^32 cells (or is a single block). Pieces with no
+// surface vertex are dropped. Deterministic; pieces come in k-d order.
 std::vector<Piece> kd_divide(const BlockCounts& counts, const DivisionOptions& options);
 
 }  // namespace dpts::core

@@ -181,7 +181,7 @@ double DemInfo::outline_tolerance_m() const {
   return 0.01 * frame.metres_per_unit * std::min(1.0, std::fabs(frame.m[1][1]));
 }
 
-std::function<bool(std::uint32_t, std::uint32_t)> DemInfo::outline_chord_test(
+std::function<bool(std::uint64_t, std::uint64_t)> DemInfo::outline_chord_test(
     double tolerance_m, int col0, int row0, int window_width) const {
   if (!to_output) return nullptr;
   // A transformation of our own (they are not thread-safe), shared by the copies of the test
@@ -197,9 +197,10 @@ std::function<bool(std::uint32_t, std::uint32_t)> DemInfo::outline_chord_test(
   const std::array<double, 6> g{gt[0], gt[1], gt[2], gt[3], gt[4], gt[5]};
   const long win_w = window_width > 0 ? window_width : width;
   const double unit_m = metres_per_output_unit;
-  return [shared, g, win_w, col0, row0, unit_m, tolerance_m](std::uint32_t a, std::uint32_t b) {
-    const long ca = static_cast<long>(a % win_w), ra = static_cast<long>(a / win_w);
-    const long cb = static_cast<long>(b % win_w), rb = static_cast<long>(b / win_w);
+  return [shared, g, win_w, col0, row0, unit_m, tolerance_m](std::uint64_t a, std::uint64_t b) {
+    const auto w = static_cast<std::uint64_t>(win_w);
+    const long ca = static_cast<long>(a % w), ra = static_cast<long>(a / w);
+    const long cb = static_cast<long>(b % w), rb = static_cast<long>(b / w);
     const long steps = std::max(std::labs(cb - ca), std::labs(rb - ra));
     if (steps < 2) return true;
     // The cell halfway along the grid line (a and b lie on one row, column or diagonal).
@@ -379,10 +380,6 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
   if (width < 2 || height < 2) {
     throw InputError(path + ": " + std::to_string(width) + " x " + std::to_string(height) +
                      " cells; at least 2 x 2 are needed");
-  }
-  if (static_cast<double>(width) * height >= 4294967295.0) {
-    throw InputError(path + ": " + std::to_string(width) + " x " + std::to_string(height) +
-                     " cells is too many for one piece (limit 2^32)");
   }
   if (ds->GetRasterCount() > 1) {
     dem.notes.push_back(path + ": " + std::to_string(ds->GetRasterCount()) + " bands; using band " +
@@ -677,7 +674,21 @@ std::string all_nodata_message(const DemInfo& dem) {
   return dem.path + ": band " + std::to_string(dem.band) + " is all no-data" + nodata;
 }
 
+void check_whole_size(const DemInfo& dem, const std::string& what) {
+  if (dem.cell_count() <= kMaxWholeCells) return;
+  throw InputError(dem.path + ": " + std::to_string(dem.width) + " x " +
+                   std::to_string(dem.height) + " cells, more than 2^32: too many for " + what);
+}
+
+bool WindowReader::empty(int col0, int row0, int width, int height) {
+  if (!info_.has_nodata) return false;  // a sparse file's missing blocks read as 0 then
+  GDALRasterBand* band = static_cast<GDALDataset*>(dataset_)->GetRasterBand(info_.band);
+  const int status = band->GetDataCoverageStatus(col0, row0, width, height);
+  return status == GDAL_DATA_COVERAGE_STATUS_EMPTY;
+}
+
 Dem read_dem(DemInfo info, const core::Progress& progress) {
+  check_whole_size(info, "reading it whole (32-bit cell ids)");
   Dem dem;
   static_cast<DemInfo&>(dem) = std::move(info);
   WindowReader reader(dem);

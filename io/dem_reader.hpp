@@ -110,7 +110,7 @@ struct DemInfo {
   // cell b when the exact projection of the outline cell halfway between them lies within
   // tolerance_m of the chord (the grid line is a smooth curve in the output CRS, farthest from
   // its chord near the middle). Null for a DEM whose frame is exact.
-  std::function<bool(std::uint32_t, std::uint32_t)> outline_chord_test(double tolerance_m,
+  std::function<bool(std::uint64_t, std::uint64_t)> outline_chord_test(double tolerance_m,
                                                                        int col0 = 0, int row0 = 0,
                                                                        int window_width = 0) const;
 
@@ -153,6 +153,11 @@ class WindowReader {
   core::HeightGrid read(int col0, int row0, int width, int height,
                         const core::Progress& progress = nullptr);
 
+  // Whether GDAL knows the window holds no data without reading it (blocks never written to a
+  // sparse file, GDALGetDataCoverageStatus): it then reads as no-data. False when in doubt
+  // (most formats), and for a band without a no-data value (missing blocks read as 0 there).
+  bool empty(int col0, int row0, int width, int height);
+
   // Cells read so far whose height was beyond kMaxAbsHeight (read as no-data), counting only
   // rows in [row0, row1) as set by count_rows (all rows by default: windows read twice count
   // twice; a streaming pass with overlapping strips narrows the rows to each strip's own).
@@ -166,16 +171,23 @@ class WindowReader {
   int count_row0_ = 0, count_row1_ = std::numeric_limits<int>::max();
 };
 
+// Most cells a DEM read whole (a core::HeightGrid, 32-bit cell indices) may have; the piece
+// engine of qem reads larger rasters in windows.
+inline constexpr std::size_t kMaxWholeCells = 0xFFFFFFFFu;
+// Throws InputError naming the file when the DEM has more than kMaxWholeCells cells, for
+// `what` (what cannot take it, and what can instead).
+void check_whole_size(const DemInfo& dem, const std::string& what);
+
 // A warning for `count` cells read as no-data because of absurd heights ("" when none).
 std::string absurd_heights_note(const DemInfo& dem, std::size_t count);
 
 // The message for a DEM whose band has no valid cell, naming the file and the band.
 std::string all_nodata_message(const DemInfo& dem);
 
-// Reads the band of `path` (options.band). No-data cells, NaN, infinite and absurd heights
-// become NaN. Checks the raster before reading it and throws InputError naming the file (not a raster, no band,
-// degenerate geotransform, too large), or UsageError for a bad --t-srs. Calls progress with
-// stage "read". GDALAllRegister() must have been called.
+// Reads the band of `path` (options.band), at most kMaxWholeCells cells. No-data cells, NaN,
+// infinite and absurd heights become NaN. Checks the raster before reading it and throws InputError
+// naming the file (not a raster, no band, degenerate geotransform, too large), or UsageError for a
+// bad --t-srs. Calls progress with stage "read". GDALAllRegister() must have been called.
 Dem read_dem(const std::string& path, const DemReadOptions& options,
              const core::Progress& progress);
 

@@ -60,6 +60,12 @@ core::BlockCounts count_blocks(const io::DemInfo& dem, std::size_t strip_bytes,
     const int r1 = std::min(dem.height, r0 + strip);
     // One row more on each side: whether a cell is a surface vertex depends on its neighbours.
     const int a = std::max(0, r0 - 1), b = std::min(dem.height, r1 + 1);
+    // note: a region GDAL knows to be empty (a sparse file's unwritten blocks) is not read:
+    // a raster of 70000 x 70000 cells, no-data but for a small window, is counted in seconds.
+    if (reader.empty(0, a, dem.width, b - a)) {
+      if (progress && !progress(static_cast<double>(r1) / dem.height, "count")) throw Cancelled();
+      continue;
+    }
     reader.count_rows(r0, r1);
     const core::HeightGrid g = reader.read(0, a, dem.width, b - a);
     for (int r = r0 - a; r < r1 - a; ++r) {
@@ -368,6 +374,9 @@ void check_memory(const io::DemInfo& dem, std::size_t target, std::size_t need, 
 
 MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
                          const core::Progress& progress, MetaStats* stats) {
+  io::check_whole_size(dem,
+                       "the meta modes (vp-meta, pld-meta: 32-bit cell ids); the default "
+                       "--algo qem reads it in tiles");
   MetaStats local;
   MetaStats& st = stats ? *stats : local;
   const auto bytes = options.tile_bytes;

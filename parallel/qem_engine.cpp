@@ -86,8 +86,9 @@ struct Positions {
   }
   // With projected positions: the outline test of collinearity on the grid (cells given as
   // col, row of a window `width` wide), where the outline's runs are straight.
+  template <typename Cell>
   std::function<bool(std::uint32_t, std::uint32_t, std::uint32_t)> collinear(
-      const std::vector<std::uint32_t>* cells, std::uint32_t width) const {
+      const std::vector<Cell>* cells, std::uint64_t width) const {
     if (!projected) return nullptr;
     return [cells, width](std::uint32_t a, std::uint32_t v, std::uint32_t b) {
       auto at = [&](std::uint32_t i, long& c, long& r) {
@@ -213,13 +214,13 @@ class BlockCache {
 struct PieceMesh {
   core::TriMesh mesh;  // frame units
   std::vector<core::Quadric> quadrics;
-  std::vector<std::uint32_t> cell;  // per vertex: its raster cell (where it started)
+  std::vector<std::uint64_t> cell;  // per vertex: its raster cell (where it started)
   std::vector<char> seam;           // per vertex: shared with another piece's window
   std::vector<double> plane_xy;     // per vertex: x, y on the grid (reprojected DEMs only)
   std::size_t bytes() const {
     return (mesh.xyz.capacity() + plane_xy.capacity()) * sizeof(double) +
            mesh.faces.capacity() * sizeof(mesh.faces[0]) +
-           quadrics.capacity() * sizeof(core::Quadric) + cell.capacity() * sizeof(std::uint32_t) +
+           quadrics.capacity() * sizeof(core::Quadric) + cell.capacity() * sizeof(std::uint64_t) +
            seam.capacity();
   }
 };
@@ -269,7 +270,7 @@ PieceMesh simplify_piece(const io::DemInfo& dem, const Positions& positions, con
   }
   mesh.faces = tin.faces;
   core::fix_orientation(mesh);
-  qo.outline_collinear = positions.collinear(&tin.cells, static_cast<std::uint32_t>(ww));
+  qo.outline_collinear = positions.collinear(&tin.cells, static_cast<std::uint64_t>(ww));
   const auto chord = dem.outline_chord_test(dem.outline_tolerance_m(), wc0, wr0, ww);
   if (chord) {
     qo.outline_chord_ok = [&tin, &chord](std::uint32_t a, std::uint32_t b) {
@@ -300,10 +301,13 @@ PieceMesh simplify_piece(const io::DemInfo& dem, const Positions& positions, con
   out.cell.resize(r.source.size());
   out.seam.resize(r.source.size());
   for (std::size_t v = 0; v < r.source.size(); ++v) {
+    // note: 64-bit: a raster may have more than 2^32 cells (a window has fewer).
     const std::uint32_t local = tin.cells[r.source[v]];
-    const auto c = static_cast<std::uint32_t>(wc0) + local % static_cast<std::uint32_t>(ww);
-    const auto row = static_cast<std::uint32_t>(wr0) + local / static_cast<std::uint32_t>(ww);
-    out.cell[v] = row * static_cast<std::uint32_t>(dem.width) + c;
+    const std::uint64_t c =
+        static_cast<std::uint64_t>(wc0) + local % static_cast<std::uint32_t>(ww);
+    const std::uint64_t row =
+        static_cast<std::uint64_t>(wr0) + local / static_cast<std::uint32_t>(ww);
+    out.cell[v] = row * static_cast<std::uint64_t>(dem.width) + c;
     out.seam[v] = seam[r.source[v]];
   }
   out.mesh.xyz.shrink_to_fit();
@@ -372,8 +376,8 @@ core::TriMesh simplify_qem(const io::DemInfo& dem, const QemEngineOptions& optio
   if (progress && !progress(0.0, "merge")) throw Cancelled();
   core::TriMesh merged;
   core::QemOptions qo;
-  std::vector<std::uint32_t> cell;
-  std::unordered_map<std::uint32_t, std::uint32_t> seam_vertex;
+  std::vector<std::uint64_t> cell;
+  std::unordered_map<std::uint64_t, std::uint32_t> seam_vertex;
   {
     // Sized once: growing by doubling would briefly hold twice the merge's largest arrays.
     std::size_t vertices = 0, faces = 0;
@@ -412,7 +416,7 @@ core::TriMesh simplify_qem(const io::DemInfo& dem, const QemEngineOptions& optio
   }
   seam_vertex = {};
   if (positions.projected) qo.to_plane = positions.to_plane();
-  qo.outline_collinear = positions.collinear(&cell, static_cast<std::uint32_t>(dem.width));
+  qo.outline_collinear = positions.collinear(&cell, static_cast<std::uint64_t>(dem.width));
   const auto chord = dem.outline_chord_test(dem.outline_tolerance_m());
   if (chord) {
     qo.outline_chord_ok = [&cell, &chord](std::uint32_t a, std::uint32_t b) {

@@ -166,7 +166,8 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
         << "<VRTDataset rasterXSize=\"70000\" rasterYSize=\"70000\"><VRTRasterBand "
            "dataType=\"Float32\" band=\"1\"/></VRTDataset>\n";
     add("70000 x 70000 raster", {"--algo", "vp-meta", path("too_many.vrt"), out}, 1,
-        path("too_many.vrt") + ": 70000 x 70000 cells is too many");
+        path("too_many.vrt") +
+            ": 70000 x 70000 cells, more than 2^32: too many for --algo vp-meta (32-bit cell ids)");
   }
   // One piece of 8000 cells (about 2.6 MB by core::piece_bytes) and 800 kept vertices.
   const std::string medium = raster("medium.tif", 100, 80, hill);

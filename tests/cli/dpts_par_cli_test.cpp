@@ -647,3 +647,76 @@ TEST_CASE("qem --max-error bounds the vertical error at every valid cell centre"
     CHECK(io::read_ply_file(out).vertex_count() == 50);
   }
 }
+
+TEST_CASE(
+    "a raster of more than 2^32 cells, no-data but for a window, runs in qem and other modes "
+    "refuse it",
+    "[cli][huge]") {
+  test::TempDir dir;
+  const auto dem = (dir / "huge.tif").string();
+  // 70000 x 70000 cells of 20 m (4.9e9), a sparse tiled GeoTIFF: only the blocks of a 64 x 64
+  // window of heights at column 40000, row 50000 are written, the rest reads as no-data.
+  constexpr int kSide = 70000, kCol = 40000, kRow = 50000, kWin = 64;
+  {
+    GDALAllRegister();
+    char** co = nullptr;
+    co = CSLSetNameValue(co, "TILED", "YES");
+    co = CSLSetNameValue(co, "SPARSE_OK", "TRUE");
+    co = CSLSetNameValue(co, "COMPRESS", "DEFLATE");
+    GDALDataset* ds = GetGDALDriverManager()->GetDriverByName("GTiff")->Create(
+        dem.c_str(), kSide, kSide, 1, GDT_Int16, co);
+    CSLDestroy(co);
+    REQUIRE(ds != nullptr);
+    double gt[6] = {300000, 20, 0, 4000000, 0, -20};
+    ds->SetGeoTransform(gt);
+    ds->SetProjection(utm_wkt().c_str());
+    ds->GetRasterBand(1)->SetNoDataValue(-32768);
+    std::vector<std::int16_t> z(kWin * kWin);
+    for (int r = 0; r < kWin; ++r) {
+      for (int c = 0; c < kWin; ++c) {
+        z[r * kWin + c] =
+            static_cast<std::int16_t>(1000 + 50 * std::sin(c * 0.3) * std::cos(r * 0.2));
+      }
+    }
+    REQUIRE(ds->GetRasterBand(1)->RasterIO(GF_Write, kCol, kRow, kWin, kWin, z.data(), kWin, kWin,
+                                           GDT_Int16, 0, 0, nullptr) == CE_None);
+    GDALClose(ds);
+  }
+  std::string bytes[2];
+  for (int k = 0; k < 2; ++k) {
+    const std::string t = std::to_string(k + 1);
+    const auto out = (dir / ("t" + t + ".ply")).string();
+    const auto r = test::run(kExe, {"--threads", t, dem, out});
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    CHECK(r.err.find("4096 vertices -> 410 vertices") != std::string::npos);
+    bytes[k] = test::file_bytes(out);
+    const io::Mesh mesh = io::read_ply_file(out);
+    REQUIRE(mesh.vertex_count() == 410);
+    // Every vertex within the window's cell centres, its corners kept.
+    const double x0 = 300000 + 20 * (kCol + 0.5), x1 = x0 + 20 * (kWin - 1);
+    const double y1 = 4000000 - 20 * (kRow + 0.5), y0 = y1 - 20 * (kWin - 1);
+    int corners = 0;
+    for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+      const double x = mesh.xyz[3 * v], y = mesh.xyz[3 * v + 1];
+      CHECK(x >= x0);
+      CHECK(x <= x1);
+      CHECK(y >= y0);
+      CHECK(y <= y1);
+      corners += (x == x0 || x == x1) && (y == y0 || y == y1) ? 1 : 0;
+    }
+    CHECK(corners == 4);
+  }
+  CHECK(bytes[0] == bytes[1]);
+  // The modes that hold cells in 32 bits refuse it, naming the file and the way that works.
+  const auto out = (dir / "out.ply").string();
+  for (const std::string algo : {"vp", "vp-meta"}) {
+    const auto r = test::run(kExe, {"--algo", algo, dem, out});
+    CHECK(r.exit_code == 1);
+    CHECK(r.err.find("dpts-par: error: " + dem +
+                     ": 70000 x 70000 cells, more than 2^32: too many") == 0);
+    CHECK(r.err.find("the default --algo qem reads it in tiles\n") != std::string::npos);
+    CHECK(count_lines(r.err) == 1);
+  }
+  CHECK(!std::filesystem::exists(out));
+}
