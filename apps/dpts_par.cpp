@@ -306,7 +306,8 @@ int run_qem(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer,
   qo.memory_limit_bytes = cli::memory_limit_bytes(o);
   if (o.max_error) qo.max_error = *o.max_error;
   par::MetaStats stats;
-  core::TriMesh result = par::simplify_qem(dem, qo, progress, &stats);
+  const io::GdalRaster source(dem);
+  core::TriMesh result = par::simplify_qem(source, qo, progress, &stats);
   printer.finish();
   after_pieces(o, dem, stats, false);
   const std::size_t faces = result.faces.size();
@@ -332,7 +333,8 @@ int run_meta(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer
   mo.seed = o.elimination.seed;
   mo.memory_limit_bytes = cli::memory_limit_bytes(o);
   par::MetaStats stats;
-  par::MetaResult result = par::simplify_meta(dem, mo, progress, &stats);
+  const io::GdalRaster source(dem);
+  par::MetaResult result = par::simplify_meta(source, mo, progress, &stats);
   printer.finish();
   after_pieces(o, dem, stats, true);
   const std::size_t faces = result.tin.faces.size();

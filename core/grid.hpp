@@ -8,8 +8,11 @@
 
 namespace dpts::core {
 
+// Most cells a HeightGrid may have: core's cell indices are 32-bit.
+inline constexpr std::size_t kMaxGridCells = 0xFFFFFFFFu;
+
 // Heights of a DEM band, row-major (row 0 first), metres. NaN marks no-data.
-// Cell (col, row) has index row * width + col; indices fit in 32 bits.
+// Cell (col, row) has index row * width + col; indices fit in 32 bits (kMaxGridCells).
 struct HeightGrid {
   int width = 0;
   int height = 0;

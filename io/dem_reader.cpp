@@ -124,7 +124,7 @@ void DemInfo::frame_mesh_to_output(core::TriMesh& mesh) const {
     grid[2 * v] = inv[0][0] * u + inv[0][1] * w;
     grid[2 * v + 1] = inv[1][0] * u + inv[1][1] * w;
   }
-  const std::vector<double> xy = output_xy_of_grid(grid);
+  const std::vector<double> xy = output_xy_of_grid_concurrent(grid);
   for (std::size_t v = 0; v < n; ++v) {
     mesh.xyz[3 * v] = xy[2 * v];
     mesh.xyz[3 * v + 1] = xy[2 * v + 1];
@@ -675,7 +675,7 @@ std::string all_nodata_message(const DemInfo& dem) {
 }
 
 void check_whole_size(const DemInfo& dem, const std::string& what) {
-  if (dem.cell_count() <= kMaxWholeCells) return;
+  if (dem.cell_count() <= core::kMaxGridCells) return;
   throw InputError(dem.path + ": " + std::to_string(dem.width) + " x " +
                    std::to_string(dem.height) + " cells, more than 2^32: too many for " + what);
 }
@@ -686,6 +686,28 @@ bool WindowReader::empty(int col0, int row0, int width, int height) {
   const int status = band->GetDataCoverageStatus(col0, row0, width, height);
   return status == GDAL_DATA_COVERAGE_STATUS_EMPTY;
 }
+
+GdalRaster::GdalRaster(const DemInfo& info)
+    : core::RasterSource(info.path, info.width, info.height, info.frame, info.block_height),
+      info_(info),
+      reader_(info) {}
+
+core::HeightGrid GdalRaster::read(int col0, int row0, int width, int height,
+                                  Implausible* implausible) const {
+  std::lock_guard<std::mutex> hold(lock_);
+  const std::size_t before = reader_.absurd_cells();
+  if (implausible) reader_.count_rows(implausible->row0, implausible->row1);
+  core::HeightGrid g = reader_.read(col0, row0, width, height);
+  if (implausible) implausible->cells += reader_.absurd_cells() - before;
+  return g;
+}
+
+bool GdalRaster::empty(int col0, int row0, int width, int height) const {
+  std::lock_guard<std::mutex> hold(lock_);
+  return reader_.empty(col0, row0, width, height);
+}
+
+std::string GdalRaster::no_valid_cell_message() const { return all_nodata_message(info_); }
 
 Dem read_dem(DemInfo info, const core::Progress& progress) {
   check_whole_size(info, "reading it whole (32-bit cell ids)");

@@ -5,11 +5,13 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
 #include "core/elimination.hpp"
 #include "core/grid.hpp"
+#include "core/raster_source.hpp"
 #include "core/steiner_graph.hpp"
 
 class OGRCoordinateTransformation;
@@ -92,7 +94,7 @@ struct DemInfo {
 
   // A mesh built in the frame (u, w, heights in frame units: core::GridFrame) moved to the
   // output CRS in place: x, y through the grid positions (the frame is linear), heights in
-  // metres. Throws IoError if the CRS transformation fails.
+  // metres. Throws IoError if the CRS transformation fails. Safe from concurrent tasks.
   void frame_mesh_to_output(core::TriMesh& mesh) const;
 
   // Grid positions (col, row; cell centres at integers) of points given in the output CRS:
@@ -171,12 +173,42 @@ class WindowReader {
   int count_row0_ = 0, count_row1_ = std::numeric_limits<int>::max();
 };
 
-// Most cells a DEM read whole (a core::HeightGrid, 32-bit cell indices) may have; the piece
-// engine of qem reads larger rasters in windows.
-inline constexpr std::size_t kMaxWholeCells = 0xFFFFFFFFu;
-// Throws InputError naming the file when the DEM has more than kMaxWholeCells cells, for
+// Throws InputError naming the file when the DEM has more than core::kMaxGridCells cells (a
+// DEM read whole is one core::HeightGrid; the piece engine of qem reads larger ones), for
 // `what` (what cannot take it, and what can instead).
 void check_whole_size(const DemInfo& dem, const std::string& what);
+
+// The DEM as the piece engines read it (core::RasterSource): one GDAL handle, opened here for
+// the whole run and shared by every task under a lock (GDAL handles are not thread-safe; a
+// piece's read is a small share of its work). The description must outlive it.
+class GdalRaster final : public core::RasterSource {
+ public:
+  explicit GdalRaster(const DemInfo& info);
+  core::HeightGrid read(int col0, int row0, int width, int height,
+                        Implausible* implausible = nullptr) const override;
+  bool empty(int col0, int row0, int width, int height) const override;
+  std::string no_valid_cell_message() const override;
+  bool reprojected() const override { return info_.to_output != nullptr; }
+  std::vector<double> output_xy_of_grid(const std::vector<double>& grid_xy) const override {
+    return info_.output_xy_of_grid_concurrent(grid_xy);
+  }
+  double metres_per_output_unit() const override { return info_.metres_per_output_unit; }
+  std::function<bool(double, double, double&, double&)> grid_of_output_fn() const override {
+    return info_.grid_of_output_fn();
+  }
+  std::function<bool(std::uint64_t, std::uint64_t)> outline_chord_test(
+      int col0, int row0, int window_width) const override {
+    return info_.outline_chord_test(info_.outline_tolerance_m(), col0, row0, window_width);
+  }
+  void frame_mesh_to_output(core::TriMesh& mesh) const override {
+    info_.frame_mesh_to_output(mesh);
+  }
+
+ private:
+  const DemInfo& info_;
+  mutable std::mutex lock_;
+  mutable WindowReader reader_;
+};
 
 // A warning for `count` cells read as no-data because of absurd heights ("" when none).
 std::string absurd_heights_note(const DemInfo& dem, std::size_t count);
@@ -184,7 +216,7 @@ std::string absurd_heights_note(const DemInfo& dem, std::size_t count);
 // The message for a DEM whose band has no valid cell, naming the file and the band.
 std::string all_nodata_message(const DemInfo& dem);
 
-// Reads the band of `path` (options.band), at most kMaxWholeCells cells. No-data cells, NaN,
+// Reads the band of `path` (options.band), at most core::kMaxGridCells cells. No-data cells, NaN,
 // infinite and absurd heights become NaN. Checks the raster before reading it and throws InputError
 // naming the file (not a raster, no band, degenerate geotransform, too large), or UsageError for a
 // bad --t-srs. Calls progress with stage "read". GDALAllRegister() must have been called.

@@ -36,38 +36,39 @@ std::uint64_t piece_seed(std::uint64_t seed, std::size_t piece) {
 }
 
 // One streaming pass over the raster in strips of whole rows: surface vertices per block.
-core::BlockCounts count_blocks(const io::DemInfo& dem, std::size_t strip_bytes,
+core::BlockCounts count_blocks(const core::RasterSource& dem, std::size_t strip_bytes,
                                const core::Progress& progress, std::size_t* valid_cells,
                                std::size_t* absurd_cells) {
   core::BlockCounts bc;
-  bc.width = dem.width;
-  bc.height = dem.height;
+  bc.width = dem.width();
+  bc.height = dem.height();
   bc.block = 16;
   auto blocks = [&](int b) {
-    return static_cast<double>((dem.width + b - 1) / b) * ((dem.height + b - 1) / b);
+    return static_cast<double>((dem.width() + b - 1) / b) * ((dem.height() + b - 1) / b);
   };
   while (blocks(bc.block) > double(1 << 20)) bc.block *= 2;
-  bc.blocks_x = (dem.width + bc.block - 1) / bc.block;
-  bc.blocks_y = (dem.height + bc.block - 1) / bc.block;
+  bc.blocks_x = (dem.width() + bc.block - 1) / bc.block;
+  bc.blocks_y = (dem.height() + bc.block - 1) / bc.block;
   bc.counts.assign(static_cast<std::size_t>(bc.blocks_x) * bc.blocks_y, 0);
   // Strips of whole blocks of the raster (GDAL reads whole blocks anyway), within the budget.
-  const std::size_t row_bytes = static_cast<std::size_t>(dem.width) * sizeof(double);
+  const std::size_t row_bytes = static_cast<std::size_t>(dem.width()) * sizeof(double);
   int strip = static_cast<int>(std::max<std::size_t>(1, strip_bytes / row_bytes));
-  strip = std::max(dem.block_height, strip / dem.block_height * dem.block_height);
-  io::WindowReader reader(dem);
+  strip = std::max(dem.block_height(), strip / dem.block_height() * dem.block_height());
+  core::RasterSource::Implausible implausible;
   *valid_cells = 0;
-  for (int r0 = 0; r0 < dem.height; r0 += strip) {
-    const int r1 = std::min(dem.height, r0 + strip);
+  for (int r0 = 0; r0 < dem.height(); r0 += strip) {
+    const int r1 = std::min(dem.height(), r0 + strip);
     // One row more on each side: whether a cell is a surface vertex depends on its neighbours.
-    const int a = std::max(0, r0 - 1), b = std::min(dem.height, r1 + 1);
+    const int a = std::max(0, r0 - 1), b = std::min(dem.height(), r1 + 1);
     // note: a region GDAL knows to be empty (a sparse file's unwritten blocks) is not read:
     // a raster of 70000 x 70000 cells, no-data but for a small window, is counted in seconds.
-    if (reader.empty(0, a, dem.width, b - a)) {
-      if (progress && !progress(static_cast<double>(r1) / dem.height, "count")) throw Cancelled();
+    if (dem.empty(0, a, dem.width(), b - a)) {
+      if (progress && !progress(static_cast<double>(r1) / dem.height(), "count")) throw Cancelled();
       continue;
     }
-    reader.count_rows(r0, r1);
-    const core::HeightGrid g = reader.read(0, a, dem.width, b - a);
+    implausible.row0 = r0;
+    implausible.row1 = r1;
+    const core::HeightGrid g = dem.read(0, a, dem.width(), b - a, &implausible);
     for (int r = r0 - a; r < r1 - a; ++r) {
       for (int c = 0; c < g.width; ++c) *valid_cells += g.is_valid(c, r) ? 1 : 0;
     }
@@ -77,9 +78,9 @@ core::BlockCounts count_blocks(const io::DemInfo& dem, std::size_t strip_bytes,
       if (row < r0 || row >= r1) continue;
       ++bc.counts[static_cast<std::size_t>(row / bc.block) * bc.blocks_x + col / bc.block];
     }
-    if (progress && !progress(static_cast<double>(r1) / dem.height, "count")) throw Cancelled();
+    if (progress && !progress(static_cast<double>(r1) / dem.height(), "count")) throw Cancelled();
   }
-  *absurd_cells = reader.absurd_cells();
+  *absurd_cells = implausible.cells;
   return bc;
 }
 
@@ -97,13 +98,13 @@ struct PieceOutput {
 
 // Reads a piece with its context, simplifies it to `budget` own vertices, and returns the
 // own vertices it kept and the outline edges that touch them (raster cell indices).
-PieceOutput simplify_piece(const io::DemInfo& dem, const core::Piece& p, std::size_t budget,
+PieceOutput simplify_piece(const core::RasterSource& dem, const core::Piece& p, std::size_t budget,
                            const MetaOptions& options, PieceReport& report,
                            const core::Progress& progress) {
   const int halo = std::max(2, options.halo);
   const int wc0 = std::max(0, p.col0 - halo), wr0 = std::max(0, p.row0 - halo);
-  const int wc1 = std::min(dem.width, p.col0 + p.width + halo);
-  const int wr1 = std::min(dem.height, p.row0 + p.height + halo);
+  const int wc1 = std::min(dem.width(), p.col0 + p.width + halo);
+  const int wr1 = std::min(dem.height(), p.row0 + p.height + halo);
   const int ww = wc1 - wc0, wh = wr1 - wr0;
   core::HeightGrid grid = read_window(dem, wc0, wr0, ww, wh, report.read_s);
   const auto t0 = std::chrono::steady_clock::now();
@@ -127,7 +128,7 @@ PieceOutput simplify_piece(const io::DemInfo& dem, const core::Piece& p, std::si
       for (int dr = -1; dr <= 1; ++dr) {
         for (int dc = -1; dc <= 1; ++dc) {
           const int gc = wc0 + c + dc, gr = wr0 + r + dr;
-          const bool in_raster = gc >= 0 && gr >= 0 && gc < dem.width && gr < dem.height;
+          const bool in_raster = gc >= 0 && gr >= 0 && gc < dem.width() && gr < dem.height();
           if (!in_raster || !grid.is_valid(c + dc, r + dr)) outline = true;
           if (in_raster && !own(c + dc, r + dr)) foreign = true;
         }
@@ -138,14 +139,14 @@ PieceOutput simplify_piece(const io::DemInfo& dem, const core::Piece& p, std::si
   // Beyond the window's sides lie other pieces' cells, except where the raster ends. (A piece
   // that is the whole raster has no neighbour to be merged with: no box.)
   const double inf = std::numeric_limits<double>::infinity();
-  if (wc0 > 0 || wr0 > 0 || wc1 < dem.width || wr1 < dem.height) {
+  if (wc0 > 0 || wr0 > 0 || wc1 < dem.width() || wr1 < dem.height()) {
     eo.chord_box =
-        core::EliminationOptions::Box{wc0 == 0 ? -inf : 0.0, wc1 == dem.width ? inf : ww - 1.0,
-                                      wr0 == 0 ? -inf : 0.0, wr1 == dem.height ? inf : wh - 1.0};
+        core::EliminationOptions::Box{wc0 == 0 ? -inf : 0.0, wc1 == dem.width() ? inf : ww - 1.0,
+                                      wr0 == 0 ? -inf : 0.0, wr1 == dem.height() ? inf : wh - 1.0};
   }
-  eo.outline_chord_ok = dem.outline_chord_test(dem.outline_tolerance_m(), wc0, wr0, ww);
+  eo.outline_chord_ok = dem.outline_chord_test(wc0, wr0, ww);
 
-  core::Eliminator elim(grid, dem.frame, eo);
+  core::Eliminator elim(grid, dem.frame(), eo);
   const auto& cells = elim.cells();
   auto own_cell = [&](std::uint32_t cell) {
     return own(static_cast<int>(cell % static_cast<std::uint32_t>(ww)),
@@ -177,7 +178,7 @@ PieceOutput simplify_piece(const io::DemInfo& dem, const core::Piece& p, std::si
   auto global = [&](std::uint32_t cell) {
     const auto c = static_cast<std::uint32_t>(wc0) + cell % static_cast<std::uint32_t>(ww);
     const auto r = static_cast<std::uint32_t>(wr0) + cell / static_cast<std::uint32_t>(ww);
-    return r * static_cast<std::uint32_t>(dem.width) + c;
+    return r * static_cast<std::uint32_t>(dem.width()) + c;
   };
   for (std::size_t id = 0; id < cells.size(); ++id) {
     if (!elim.alive(id) || !own_cell(cells[id])) continue;
@@ -311,8 +312,8 @@ double piece_value(const core::HeightGrid& window, int col0, int row0, const cor
   return pairs ? sum / pairs : 1.0;
 }
 
-std::vector<core::Piece> divide_dem(const io::DemInfo& dem, const KeepTarget& keep, int levels,
-                                    std::size_t tile_bytes, int halo,
+std::vector<core::Piece> divide_dem(const core::RasterSource& dem, const KeepTarget& keep,
+                                    int levels, std::size_t tile_bytes, int halo,
                                     const core::Progress& progress, MetaStats& st,
                                     std::size_t max_vertices) {
   auto t0 = std::chrono::steady_clock::now();
@@ -321,21 +322,21 @@ std::vector<core::Piece> divide_dem(const io::DemInfo& dem, const KeepTarget& ke
   st.block = bc.block;
   st.count_s = seconds_since(t0);
   if (st.valid_cells == 0) {
-    throw InputError(io::all_nodata_message(dem));
+    throw InputError(dem.no_valid_cell_message());
   }
   core::DivisionOptions div;
   div.levels = levels;
   div.budget_bytes = tile_bytes;
   div.halo = halo;
   div.max_vertices = max_vertices;
-  const core::GridFrame& f = dem.frame;
+  const core::GridFrame& f = dem.frame();
   div.col_metres = f.metres_per_unit * std::hypot(f.m[0][0], f.m[1][0]);
   div.row_metres = f.metres_per_unit * std::hypot(f.m[0][1], f.m[1][1]);
   std::vector<core::Piece> pieces = core::kd_divide(bc, div);
   std::size_t total = 0;
   for (const auto& p : pieces) total += p.vertices;
   if (total < 3) {
-    throw InputError(dem.path + ": " + kNothingToTriangulate);
+    throw InputError(dem.name() + ": " + kNothingToTriangulate);
   }
   st.input_vertices = total;
   st.target_vertices = target_count(keep, total);
@@ -363,20 +364,22 @@ std::size_t pieces_in_flight_bytes(const std::vector<core::Piece>& pieces, int h
   return sum;
 }
 
-void check_memory(const io::DemInfo& dem, std::size_t target, std::size_t need, std::size_t limit) {
+void check_memory(const core::RasterSource& dem, std::size_t target, std::size_t need,
+                  std::size_t limit) {
   if (limit == 0 || need <= limit) return;
-  throw InputError(dem.path + ": keeping " + std::to_string(target) +
+  throw InputError(dem.name() + ": keeping " + std::to_string(target) +
                    " vertices, with its pieces in flight, needs about " +
                    format_bytes(static_cast<double>(need)) + ", more than the " +
                    format_bytes(static_cast<double>(limit)) +
                    " available; keep fewer (--keep, --vertices) or use a smaller --tile-mb");
 }
 
-MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
+MetaResult simplify_meta(const core::RasterSource& dem, const MetaOptions& options,
                          const core::Progress& progress, MetaStats* stats) {
-  io::check_whole_size(dem,
-                       "the meta modes (vp-meta, pld-meta: 32-bit cell ids); the default "
-                       "--algo qem reads it in tiles");
+  if (dem.cell_count() > core::kMaxGridCells) {
+    throw InputError(dem.name() +
+                     ": more than 2^32 cells, too many for the meta engine (32-bit cell ids)");
+  }
   MetaStats local;
   MetaStats& st = stats ? *stats : local;
   const auto bytes = options.tile_bytes;
@@ -398,14 +401,10 @@ MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
                         for (std::size_t i = r.begin(); i < r.end(); ++i) {
                           shared.check();
                           const core::Piece& p = pieces[i];
-                          core::HeightGrid g;
-                          {
-                            io::WindowReader reader(dem);
-                            g = reader.read(p.col0, p.row0, p.width, p.height);
-                          }
+                          const core::HeightGrid g = dem.read(p.col0, p.row0, p.width, p.height);
                           tbb::this_task_arena::isolate([&] {
                             st.pieces[i].value =
-                                piece_value(g, p.col0, p.row0, dem.frame, options.value_points,
+                                piece_value(g, p.col0, p.row0, dem.frame(), options.value_points,
                                             options.value_cells, piece_seed(options.seed, i));
                           });
                           shared.update(i, 1.0, "values");
@@ -515,7 +514,7 @@ MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
   for (std::size_t k = 0; k < kept.size(); ++k)
     cells[k] = kept[k].first, result.z[k] = kept[k].second;
   kept = {};
-  result.tin = core::merge_kept(dem.width, dem.frame, cells, outline);
+  result.tin = core::merge_kept(dem.width(), dem.frame(), cells, outline);
   st.kept_vertices = result.tin.cells.size();
   st.merge_s = seconds_since(t0);
   if (progress && !progress(1.0, "merge")) throw Cancelled();

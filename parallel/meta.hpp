@@ -1,6 +1,6 @@
 // The meta method PLD'/VP' (the DPTS paper, sections 3.2 and 4.3) as a parallel, out-of-core
 // engine: a streaming count pass, a k-d division into pieces, piece values and P2L budgets,
-// oneTBB tasks that read and simplify pieces concurrently (each through its own GDAL handle),
+// oneTBB tasks that read (from one core::RasterSource) and simplify pieces concurrently,
 // and one Delaunay merge of the kept vertices. Only the kept vertices (and a small count grid)
 // are held for the whole DEM; everything else lives as long as one piece.
 #pragma once
@@ -12,7 +12,7 @@
 
 #include "core/elimination.hpp"
 #include "core/kd_division.hpp"
-#include "io/dem_reader.hpp"
+#include "core/raster_source.hpp"
 #include "parallel/simplify.hpp"
 
 namespace dpts::par {
@@ -48,7 +48,7 @@ struct PieceReport {
 struct MetaStats {
   std::size_t input_vertices = 0, target_vertices = 0, kept_vertices = 0;
   std::size_t valid_cells = 0;
-  std::size_t absurd_cells = 0;  // heights beyond io::kMaxAbsHeight, read as no-data
+  std::size_t absurd_cells = 0;  // implausible heights read as no-data (RasterSource::Implausible)
   int block = 0;
   std::vector<PieceReport> pieces;
   // Wall time per stage.
@@ -69,7 +69,7 @@ struct MetaResult {
 // Runs the whole method on band 1 of the DEM. Progress is reported (serialized) with stages
 // "count", "values", "simplify", "merge"; returning false stops with dpts::Cancelled. Throws
 // InputError when the DEM has no surface, IoError/InputError when a read fails.
-MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
+MetaResult simplify_meta(const core::RasterSource& dem, const MetaOptions& options,
                          const core::Progress& progress, MetaStats* stats = nullptr);
 
 // The piece engines' first stage: one streaming count of surface vertices per block (in
@@ -77,8 +77,8 @@ MetaResult simplify_meta(const io::DemInfo& dem, const MetaOptions& options,
 // `halo` cells of context (and hold at most max_vertices surface vertices, 0: any). Fills st's
 // counts, block, count_s, target (from keep) and pieces.
 // Throws InputError when the DEM has no valid cell or fewer than 3 surface vertices.
-std::vector<core::Piece> divide_dem(const io::DemInfo& dem, const KeepTarget& keep, int levels,
-                                    std::size_t tile_bytes, int halo,
+std::vector<core::Piece> divide_dem(const core::RasterSource& dem, const KeepTarget& keep,
+                                    int levels, std::size_t tile_bytes, int halo,
                                     const core::Progress& progress, MetaStats& st,
                                     std::size_t max_vertices = 0);
 
@@ -93,7 +93,8 @@ std::size_t pieces_in_flight_bytes(const std::vector<core::Piece>& pieces, int h
 
 // Refuses (InputError naming the DEM, the target and both sizes) a run whose estimated need
 // exceeds limit; limit 0: no check.
-void check_memory(const io::DemInfo& dem, std::size_t target, std::size_t need, std::size_t limit);
+void check_memory(const core::RasterSource& dem, std::size_t target, std::size_t need,
+                  std::size_t limit);
 
 // Peak resident memory of this process so far in kB (Linux VmHWM), 0 where unknown.
 std::size_t peak_rss_kb();

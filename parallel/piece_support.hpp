@@ -14,7 +14,7 @@
 
 #include "core/elimination.hpp"
 #include "core/errors.hpp"
-#include "io/dem_reader.hpp"
+#include "core/raster_source.hpp"
 
 namespace dpts::par {
 
@@ -22,13 +22,12 @@ inline double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Reads a piece's window through a GDAL handle of its own (pieces are read concurrently) and
-// sets read_s to the time it took.
-inline core::HeightGrid read_window(const io::DemInfo& dem, int col0, int row0, int width,
+// Reads a piece's window and sets read_s to the time it took (waiting for the source
+// included: pieces read concurrently).
+inline core::HeightGrid read_window(const core::RasterSource& dem, int col0, int row0, int width,
                                     int height, double& read_s) {
   const auto t0 = std::chrono::steady_clock::now();
-  io::WindowReader reader(dem);
-  core::HeightGrid grid = reader.read(col0, row0, width, height);
+  core::HeightGrid grid = dem.read(col0, row0, width, height);
   read_s = seconds_since(t0);
   return grid;
 }

@@ -28,20 +28,20 @@ namespace {
 // stand-in there, and a collapse's thin triangles, unfolded in the frame, came out folded in
 // the output (295 faces on olympic_srtm1 to 10 %). Folds are tested where they matter.
 struct Positions {
-  const io::DemInfo* dem = nullptr;
+  const core::RasterSource* dem = nullptr;
   bool projected = false;
   double ox = 0, oy = 0, scale = 1;  // frame units = (output - o) * scale
 
-  explicit Positions(const io::DemInfo& d) : dem(&d), projected(d.to_output != nullptr) {
+  explicit Positions(const core::RasterSource& d) : dem(&d), projected(d.reprojected()) {
     if (!projected) return;
     const std::vector<double> o = d.output_xy_of_grid({0.0, 0.0});
     ox = o[0], oy = o[1];
-    scale = d.metres_per_output_unit / d.frame.metres_per_unit;
+    scale = d.metres_per_output_unit() / d.frame().metres_per_unit;
   }
   // x, y of cells (col, row pairs) in frame units; safe from concurrent tasks.
   std::vector<double> of(const std::vector<double>& grid_xy) const {
     if (!projected) return frame_of(grid_xy);
-    std::vector<double> xy = dem->output_xy_of_grid_concurrent(grid_xy);
+    std::vector<double> xy = dem->output_xy_of_grid(grid_xy);
     for (std::size_t i = 0; 2 * i < xy.size(); ++i) {
       xy[2 * i] = (xy[2 * i] - ox) * scale;
       xy[2 * i + 1] = (xy[2 * i + 1] - oy) * scale;
@@ -53,8 +53,8 @@ struct Positions {
     std::vector<double> xy(grid_xy.size());
     for (std::size_t i = 0; 2 * i < grid_xy.size(); ++i) {
       const int c = static_cast<int>(grid_xy[2 * i]), r = static_cast<int>(grid_xy[2 * i + 1]);
-      xy[2 * i] = dem->frame.u(c, r);
-      xy[2 * i + 1] = dem->frame.w(c, r);
+      xy[2 * i] = dem->frame().u(c, r);
+      xy[2 * i + 1] = dem->frame().w(c, r);
     }
     return xy;
   }
@@ -63,7 +63,7 @@ struct Positions {
   // task).
   std::function<bool(const double*, double*)> to_plane() const {
     const auto grid_of = dem->grid_of_output_fn();
-    const core::GridFrame f = dem->frame;
+    const core::GridFrame f = dem->frame();
     return [grid_of, f, ox = ox, oy = oy, scale = scale](const double* xyz, double* xy) {
       double c, r;
       if (!grid_of(ox + xyz[0] / scale, oy + xyz[1] / scale, c, r)) return false;
@@ -81,7 +81,7 @@ struct Positions {
     for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
       mesh.xyz[3 * v] = ox + mesh.xyz[3 * v] / scale;
       mesh.xyz[3 * v + 1] = oy + mesh.xyz[3 * v + 1] / scale;
-      mesh.xyz[3 * v + 2] *= dem->frame.metres_per_unit;
+      mesh.xyz[3 * v + 2] *= dem->frame().metres_per_unit;
     }
   }
   // With projected positions: the outline test of collinearity on the grid (cells given as
@@ -108,14 +108,14 @@ struct Positions {
 // for cells in [c0, c1] x [r0, r1], the cells it can reach.
 class VerticalBound {
  public:
-  VerticalBound(const io::DemInfo& dem, double max_error_m) : frame_(dem.frame) {
+  VerticalBound(const core::RasterSource& dem, double max_error_m) : frame_(dem.frame()) {
     frame_.inverse(to_grid_);
-    unit_ = dem.frame.metres_per_unit;
+    unit_ = dem.frame().metres_per_unit;
     // note: a reprojected DEM's frame is a linear stand-in for the output CRS; heights
     // interpolated there differ slightly from those in the output CRS (3.000224 for a bound
     // of 3 on zion_canyon), so such a DEM gets 0.1 % of margin; any other 1e-9 for the
     // rounding of the transform back to the output CRS.
-    limit_ = max_error_m / unit_ * (dem.to_output ? 0.999 : 1 - 1e-9);
+    limit_ = max_error_m / unit_ * (dem.reprojected() ? 0.999 : 1 - 1e-9);
   }
 
   template <class Heights>
@@ -164,10 +164,8 @@ class VerticalBound {
 // on demand, the least recently used dropped beyond `bytes`. Serial use only.
 class BlockCache {
  public:
-  BlockCache(const io::DemInfo& dem, std::size_t bytes)
-      : dem_(dem),
-        reader_(dem),
-        capacity_(std::max<std::size_t>(4, bytes / (sizeof(double) * kSide * kSide))) {}
+  BlockCache(const core::RasterSource& dem, std::size_t bytes)
+      : dem_(dem), capacity_(std::max<std::size_t>(4, bytes / (sizeof(double) * kSide * kSide))) {}
 
   double operator()(int col, int row) {
     const int bc = col / kSide, br = row / kSide;
@@ -181,8 +179,8 @@ class BlockCache {
         }
         const int c0 = bc * kSide, r0 = br * kSide;
         Block b;
-        b.grid = reader_.read(c0, r0, std::min(kSide, dem_.width - c0),
-                              std::min(kSide, dem_.height - r0));
+        b.grid = dem_.read(c0, r0, std::min(kSide, dem_.width() - c0),
+                           std::min(kSide, dem_.height() - r0));
         lru_.push_front(key);
         b.at = lru_.begin();
         it = blocks_.emplace(key, std::move(b)).first;
@@ -201,8 +199,7 @@ class BlockCache {
     core::HeightGrid grid;
     std::list<std::uint64_t>::iterator at;
   };
-  const io::DemInfo& dem_;
-  io::WindowReader reader_;
+  const core::RasterSource& dem_;
   std::size_t capacity_;
   std::unordered_map<std::uint64_t, Block> blocks_;
   std::list<std::uint64_t> lru_;  // most recent first
@@ -225,21 +222,21 @@ struct PieceMesh {
   }
 };
 
-PieceMesh simplify_piece(const io::DemInfo& dem, const Positions& positions, const core::Piece& p,
-                         double fraction, const QemEngineOptions& options, PieceReport& report,
-                         const core::Progress& progress) {
+PieceMesh simplify_piece(const core::RasterSource& dem, const Positions& positions,
+                         const core::Piece& p, double fraction, const QemEngineOptions& options,
+                         PieceReport& report, const core::Progress& progress) {
   // The piece's cells and one more column and row (the next pieces' first): the grid squares
   // whose top-left corner is the piece's.
   const int wc0 = p.col0, wr0 = p.row0;
-  const int wc1 = std::min(dem.width, p.col0 + p.width + 1);
-  const int wr1 = std::min(dem.height, p.row0 + p.height + 1);
+  const int wc1 = std::min(dem.width(), p.col0 + p.width + 1);
+  const int wr1 = std::min(dem.height(), p.row0 + p.height + 1);
   const int ww = wc1 - wc0, wh = wr1 - wr0;
   core::HeightGrid grid = read_window(dem, wc0, wr0, ww, wh, report.read_s);
   const auto t0 = std::chrono::steady_clock::now();
-  const core::GridTin tin = core::grid_tin(grid, core::delaunay_diagonal(dem.frame));
+  const core::GridTin tin = core::grid_tin(grid, core::delaunay_diagonal(dem.frame()));
   PieceMesh out;
   if (tin.faces.empty()) return out;
-  const double unit = dem.frame.metres_per_unit;
+  const double unit = dem.frame().metres_per_unit;
   core::TriMesh mesh;
   std::vector<double> grid_xy(2 * tin.cells.size());
   for (std::size_t v = 0; v < tin.cells.size(); ++v) {
@@ -263,15 +260,15 @@ PieceMesh simplify_piece(const io::DemInfo& dem, const Positions& positions, con
     mesh.xyz[3 * v + 1] = xy[2 * v + 1];
     mesh.xyz[3 * v + 2] = grid.z[tin.cells[v]] / unit;
     // A window side inside the raster is a seam: another window has its cells too.
-    const bool seam = (c == 0 && wc0 > 0) || (c == ww - 1 && wc1 < dem.width) ||
-                      (r == 0 && wr0 > 0) || (r == wh - 1 && wr1 < dem.height);
+    const bool seam = (c == 0 && wc0 > 0) || (c == ww - 1 && wc1 < dem.width()) ||
+                      (r == 0 && wr0 > 0) || (r == wh - 1 && wr1 < dem.height());
     qo.locked[v] = seam ? 1 : 0;
     locked += seam ? 1 : 0;
   }
   mesh.faces = tin.faces;
   core::fix_orientation(mesh);
   qo.outline_collinear = positions.collinear(&tin.cells, static_cast<std::uint64_t>(ww));
-  const auto chord = dem.outline_chord_test(dem.outline_tolerance_m(), wc0, wr0, ww);
+  const auto chord = dem.outline_chord_test(wc0, wr0, ww);
   if (chord) {
     qo.outline_chord_ok = [&tin, &chord](std::uint32_t a, std::uint32_t b) {
       return chord(tin.cells[a], tin.cells[b]);
@@ -307,7 +304,7 @@ PieceMesh simplify_piece(const io::DemInfo& dem, const Positions& positions, con
         static_cast<std::uint64_t>(wc0) + local % static_cast<std::uint32_t>(ww);
     const std::uint64_t row =
         static_cast<std::uint64_t>(wr0) + local / static_cast<std::uint32_t>(ww);
-    out.cell[v] = row * static_cast<std::uint64_t>(dem.width) + c;
+    out.cell[v] = row * static_cast<std::uint64_t>(dem.width()) + c;
     out.seam[v] = seam[r.source[v]];
   }
   out.mesh.xyz.shrink_to_fit();
@@ -328,7 +325,7 @@ PieceMesh simplify_piece(const io::DemInfo& dem, const Positions& positions, con
 // (which also gives more threads work). Pieces of DEMs up to 16 x this are as before.
 constexpr std::size_t kQemPieceVertices = 1 << 16;
 
-core::TriMesh simplify_qem(const io::DemInfo& dem, const QemEngineOptions& options,
+core::TriMesh simplify_qem(const core::RasterSource& dem, const QemEngineOptions& options,
                            const core::Progress& progress, MetaStats* stats) {
   MetaStats local;
   MetaStats& st = stats ? *stats : local;
@@ -416,8 +413,8 @@ core::TriMesh simplify_qem(const io::DemInfo& dem, const QemEngineOptions& optio
   }
   seam_vertex = {};
   if (positions.projected) qo.to_plane = positions.to_plane();
-  qo.outline_collinear = positions.collinear(&cell, static_cast<std::uint64_t>(dem.width));
-  const auto chord = dem.outline_chord_test(dem.outline_tolerance_m());
+  qo.outline_collinear = positions.collinear(&cell, static_cast<std::uint64_t>(dem.width()));
+  const auto chord = dem.outline_chord_test();
   if (chord) {
     qo.outline_chord_ok = [&cell, &chord](std::uint32_t a, std::uint32_t b) {
       return chord(cell[a], cell[b]);
@@ -429,7 +426,7 @@ core::TriMesh simplify_qem(const io::DemInfo& dem, const QemEngineOptions& optio
     bound.emplace(dem, options.max_error);
     cells.emplace(dem, bytes);
     qo.triangle_ok = [&](const double* a, const double* b, const double* c) {
-      return bound->ok(a, b, c, 0, 0, dem.width - 1, dem.height - 1, *cells);
+      return bound->ok(a, b, c, 0, 0, dem.width() - 1, dem.height() - 1, *cells);
     };
   }
   const core::Progress merge_progress = [&](double fr, std::string_view) {

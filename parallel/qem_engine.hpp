@@ -22,8 +22,8 @@
 #include <cstddef>
 
 #include "core/elimination.hpp"
+#include "core/raster_source.hpp"
 #include "core/steiner_graph.hpp"
-#include "io/dem_reader.hpp"
 #include "parallel/meta.hpp"
 #include "parallel/simplify.hpp"
 
@@ -51,7 +51,7 @@ inline constexpr std::size_t kQemBytesPerKeptVertex = 700;
 // Runs the engine on band 1. The mesh is in the output CRS (heights in metres), faces
 // counter-clockwise. stats gets the counts, the pieces (value 0) and
 // the stage times. Progress stages "count", "simplify", "merge"; false stops with Cancelled.
-core::TriMesh simplify_qem(const io::DemInfo& dem, const QemEngineOptions& options,
+core::TriMesh simplify_qem(const core::RasterSource& dem, const QemEngineOptions& options,
                            const core::Progress& progress, MetaStats* stats = nullptr);
 
 }  // namespace dpts::par

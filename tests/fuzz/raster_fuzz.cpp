@@ -129,7 +129,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     meta.keep.percent = 30.0;
     meta.levels = 2;
     meta.tile_bytes = 1 << 12;
-    par::simplify_meta(info, meta, nullptr);
+    par::simplify_meta(io::GdalRaster(info), meta, nullptr);
     // The default mode, qem's piece engine, alone and with --max-error: its TIN must be valid
     // (a fold or a flat face is a finding, as a crash is).
     for (const double bound : {0.0, 1.0}) {
@@ -138,7 +138,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       qo.levels = 2;
       qo.tile_bytes = 1 << 12;
       qo.max_error = bound;
-      const core::TriMesh m = par::simplify_qem(info, qo, nullptr);
+      const core::TriMesh m = par::simplify_qem(io::GdalRaster(info), qo, nullptr);
       const core::MeshCheck mc = core::check_mesh(core::xy_of(m.xyz), m.faces);
       if (mc.clockwise_or_flat != 0 || mc.bad_edges != 0) __builtin_trap();
     }

@@ -11,6 +11,7 @@
 
 #include "core/footprint.hpp"
 #include "core/surface_sampling.hpp"
+#include "io/dem_reader.hpp"
 #include "test_support.hpp"
 
 using namespace dpts;
@@ -52,7 +53,7 @@ TEST_CASE("VP' and PLD' keep exactly the requested count with an exact footprint
     auto o = options(static_cast<std::size_t>(share * input), 4, 64 << 10);
     o.elimination.importance = kind;
     par::MetaStats stats;
-    const par::MetaResult r = par::simplify_meta(fx.info, o, nullptr, &stats);
+    const par::MetaResult r = par::simplify_meta(io::GdalRaster(fx.info), o, nullptr, &stats);
     CHECK(stats.pieces.size() >= 16);
     CHECK(stats.input_vertices == input);
     CHECK(r.tin.cells.size() == o.keep.vertices.value());
@@ -71,7 +72,7 @@ TEST_CASE("one piece gives exactly the whole-DEM elimination", "[parallel][meta]
   const std::size_t input = core::surface_cells(fx.grid).size();
   auto o = options(input / 5, 0, std::size_t{1} << 40);
   par::MetaStats stats;
-  const par::MetaResult r = par::simplify_meta(fx.info, o, nullptr, &stats);
+  const par::MetaResult r = par::simplify_meta(io::GdalRaster(fx.info), o, nullptr, &stats);
   REQUIRE(stats.pieces.size() == 1);
   const core::Tin whole = par::simplify_dem(fx.grid, fx.info.frame, o.elimination, o.keep, nullptr);
   CHECK(r.tin.cells == whole.cells);
@@ -85,7 +86,7 @@ TEST_CASE("VP' gives the same TIN for 1, 2 and 4 threads", "[parallel][meta][det
   auto run = [&](int threads) {
     tbb::global_control c(tbb::global_control::max_allowed_parallelism,
                           static_cast<std::size_t>(threads));
-    return par::simplify_meta(fx.info, o, nullptr).tin;
+    return par::simplify_meta(io::GdalRaster(fx.info), o, nullptr).tin;
   };
   const core::Tin a = run(1);
   for (int threads : {2, 4}) {

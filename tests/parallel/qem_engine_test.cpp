@@ -12,6 +12,7 @@
 
 #include "core/mesh_check.hpp"
 #include "core/surface_sampling.hpp"
+#include "io/dem_reader.hpp"
 #include "test_support.hpp"
 
 using namespace dpts;
@@ -67,7 +68,8 @@ TEST_CASE("qem's piece engine keeps the count and covers the footprint once acro
   for (double share : {0.3, 0.1}) {
     par::MetaStats stats;
     const std::size_t keep = static_cast<std::size_t>(share * 6000);
-    const core::TriMesh m = par::simplify_qem(fx.info, options(keep), nullptr, &stats);
+    const core::TriMesh m =
+        par::simplify_qem(io::GdalRaster(fx.info), options(keep), nullptr, &stats);
     CHECK(stats.pieces.size() >= 16);
     CHECK(m.vertex_count() == keep);
     CHECK(stats.kept_vertices == keep);
@@ -91,7 +93,7 @@ TEST_CASE("qem's piece engine gives the same mesh for 1, 2 and 4 threads",
   auto run = [&](int threads) {
     tbb::global_control c(tbb::global_control::max_allowed_parallelism,
                           static_cast<std::size_t>(threads));
-    return par::simplify_qem(fx.info, options(600), nullptr);
+    return par::simplify_qem(io::GdalRaster(fx.info), options(600), nullptr);
   };
   const core::TriMesh a = run(1);
   for (int threads : {2, 4}) {
@@ -99,4 +101,37 @@ TEST_CASE("qem's piece engine gives the same mesh for 1, 2 and 4 threads",
     CHECK(a.xyz == b.xyz);
     CHECK(a.faces == b.faces);
   }
+}
+
+TEST_CASE("the engines read a grid in memory as they read it from GDAL", "[parallel][qem][meta]") {
+  Fixture fx(false);
+  const core::HeightGrid grid = io::read_dem(fx.path, {}, nullptr).grid;
+  const core::MemoryRaster memory(grid, fx.info.frame, "hills");
+  CHECK(memory.width() == 96);
+  CHECK(memory.height() == 80);
+  // qem: the same faces; vertices moved by the geotransform's offset (cell centres), the
+  // memory source's output coordinates being the frame's in metres.
+  const core::TriMesh a = par::simplify_qem(io::GdalRaster(fx.info), options(600), nullptr);
+  const core::TriMesh b = par::simplify_qem(memory, options(600), nullptr);
+  REQUIRE(a.vertex_count() == 600);
+  REQUIRE(b.vertex_count() == 600);
+  CHECK(a.faces == b.faces);
+  for (std::size_t v = 0; v < a.vertex_count(); ++v) {
+    CHECK(a.xyz[3 * v] - b.xyz[3 * v] == 500015.0);
+    CHECK(a.xyz[3 * v + 1] - b.xyz[3 * v + 1] == 4099985.0);
+    CHECK(a.xyz[3 * v + 2] == b.xyz[3 * v + 2]);
+  }
+  // The meta engine: the same kept cells and faces.
+  par::MetaOptions mo;
+  mo.keep.vertices = 600;
+  mo.tile_bytes = 64 << 10;
+  mo.value_points = 8;
+  const par::MetaResult ma = par::simplify_meta(io::GdalRaster(fx.info), mo, nullptr);
+  const par::MetaResult mb = par::simplify_meta(memory, mo, nullptr);
+  CHECK(ma.tin.cells.size() == 600);
+  CHECK(ma.tin.cells == mb.tin.cells);
+  CHECK(ma.tin.faces == mb.tin.faces);
+  CHECK(ma.z == mb.z);
+  // A window outside the grid is refused.
+  CHECK_THROWS_AS(memory.read(90, 0, 10, 1), std::out_of_range);
 }

@@ -60,7 +60,7 @@ TEST_CASE("St Helens at 10 % with VP' and PLD': exact count, footprint covered o
   o.elimination.importance = GENERATE(core::Importance::vp, core::Importance::pld);
   o.keep.percent = 10.0;
   par::MetaStats stats;
-  const par::MetaResult r = par::simplify_meta(dem, o, nullptr, &stats);
+  const par::MetaResult r = par::simplify_meta(io::GdalRaster(dem), o, nullptr, &stats);
   CHECK(stats.pieces.size() == 16);
   CHECK(r.tin.cells.size() == 1638);
   test::check_tin(dem.grid, r.tin, dem.frame);
@@ -76,7 +76,7 @@ TEST_CASE("Andorra SRTM voids stay open with VP' on many small pieces", "[shared
   o.levels = 6;
   o.tile_bytes = 1 << 20;
   par::MetaStats stats;
-  const par::MetaResult r = par::simplify_meta(dem, o, nullptr, &stats);
+  const par::MetaResult r = par::simplify_meta(io::GdalRaster(dem), o, nullptr, &stats);
   CHECK(stats.pieces.size() >= 64);
   CHECK(r.tin.cells.size() == 1566);  // round(0.1 x 15658), outline floors made up elsewhere
   CHECK(core::faces_over_nodata(dem.grid, test::grid_xy(dem.grid, r.tin), r.tin.faces) == 0);
@@ -181,7 +181,7 @@ TEST_CASE("Andorra SRTM voids: qem's pieces in UTM leave every void open, unfold
     o.keep.percent = percent;
     o.levels = 2;
     par::MetaStats st;
-    const core::TriMesh m = par::simplify_qem(dem, o, nullptr, &st);
+    const core::TriMesh m = par::simplify_qem(io::GdalRaster(dem), o, nullptr, &st);
     CHECK(st.pieces.size() == 4);
     CHECK(m.vertex_count() == par::target_count(o.keep, st.input_vertices));
     const std::vector<double> xy = core::xy_of(m.xyz);
@@ -210,7 +210,7 @@ TEST_CASE("peru_mongon at 50-95 % with qem: no face flat or folded in the output
     par::QemEngineOptions o;
     o.keep.percent = percent;
     par::MetaStats st;
-    const core::TriMesh m = par::simplify_qem(dem, o, nullptr, &st);
+    const core::TriMesh m = par::simplify_qem(io::GdalRaster(dem), o, nullptr, &st);
     CHECK(m.vertex_count() == par::target_count(o.keep, st.input_vertices));
     const core::MeshCheck mc = core::check_mesh(core::xy_of(m.xyz), m.faces);
     CHECK(mc.clockwise_or_flat == 0);
@@ -235,7 +235,7 @@ TEST_CASE("qem's pieces with --max-error: every valid cell centre within the bou
         o.max_error = bound;
         o.tile_bytes = 1 << 20;  // the merge's cache: 2 blocks of cells (at least 4 kept)
         par::MetaStats st;
-        const core::TriMesh m = par::simplify_qem(dem, o, nullptr, &st);
+        const core::TriMesh m = par::simplify_qem(io::GdalRaster(dem), o, nullptr, &st);
         CHECK(st.pieces.size() == 8);
         CHECK(m.vertex_count() >= count);
         CHECK(core::check_mesh(core::xy_of(m.xyz), m.faces).clockwise_or_flat == 0);
