@@ -1,4 +1,6 @@
 // dpts-par: simplify a DEM into a distance-preserving TIN (PLY). Thin: parse, call, report.
+// Built a second time with DPTS_MPI as dpts-mpi: the same options and output, the qem engine's
+// pieces spread over MPI ranks (apps/mpi_pieces.hpp).
 #include <cpl_conv.h>
 #include <cpl_error.h>
 #include <gdal_priv.h>
@@ -12,6 +14,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 #include "apps/batch.hpp"
 #include "apps/cli.hpp"
@@ -26,6 +29,13 @@
 #include "parallel/meta.hpp"
 #include "parallel/qem_engine.hpp"
 #include "parallel/simplify.hpp"
+
+#ifdef DPTS_MPI
+#include "apps/mpi_pieces.hpp"
+#define DPTS_PROG "dpts-mpi"
+#else
+#define DPTS_PROG "dpts-par"
+#endif
 
 namespace {
 
@@ -97,13 +107,13 @@ void record_output(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem,
 void print_notes(const dpts::io::DemInfo& dem, const dpts::cli::ParOptions& o) {
   if (!g_report.path.empty()) g_report.input_json = dpts::cli::input_json(dem, 0, 0);
   for (const std::string& note : dem.notes) {
-    if (!o.quiet || note.rfind("warning", 0) == 0) std::cerr << "dpts-par: " << note << "\n";
+    if (!o.quiet || note.rfind("warning", 0) == 0) std::cerr << DPTS_PROG ": " << note << "\n";
   }
 }
 
 void warn_kept(std::size_t kept, std::size_t target) {
   if (kept > target) {
-    std::cerr << "dpts-par: warning: kept " << kept << " vertices, not " << target
+    std::cerr << DPTS_PROG ": warning: kept " << kept << " vertices, not " << target
               << ": the outline of the valid data (its corners and the bends round voids) "
               << "needs them\n";
   }
@@ -114,8 +124,8 @@ void summary(const dpts::cli::ParOptions& o, std::size_t in, std::size_t kept, s
   if (o.quiet) return;
   const double secs =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::fprintf(stderr, "dpts-par: %zu vertices -> %zu vertices, %zu faces (%s, %.2f s) -> %s\n", in,
-               kept, faces, o.algo_text.c_str(), secs, o.output.c_str());
+  std::fprintf(stderr, DPTS_PROG ": %zu vertices -> %zu vertices, %zu faces (%s, %.2f s) -> %s\n",
+               in, kept, faces, o.algo_text.c_str(), secs, o.output.c_str());
 }
 
 // Writes a mesh (x, y in the output CRS) as PLY, refusing one with folded faces.
@@ -207,7 +217,7 @@ int run_qslim(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printe
   printer.finish();
   warn_kept(stats.kept_vertices, target);
   if (o.verbose) {
-    std::fprintf(stderr, "dpts-par: %s: %zu collapses refused (fold or border)\n",
+    std::fprintf(stderr, DPTS_PROG ": %s: %zu collapses refused (fold or border)\n",
                  o.algo_text.c_str(), stats.rejected_folds);
   }
   const std::size_t faces = result.faces.size();
@@ -222,19 +232,19 @@ int run_qslim(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printe
 // memory.
 void print_pieces(const dpts::par::MetaStats& stats, bool values) {
   std::fprintf(stderr,
-               "dpts-par: %zu pieces (blocks of %d cells), %zu surface vertices, keep %zu\n",
+               DPTS_PROG ": %zu pieces (blocks of %d cells), %zu surface vertices, keep %zu\n",
                stats.pieces.size(), stats.block, stats.input_vertices, stats.target_vertices);
-  std::fprintf(stderr,
-               "dpts-par: piece  col0  row0 width height vertices    value   P2L%%  budget    "
+  std::fprintf(stderr, DPTS_PROG
+               ": piece  col0  row0 width height vertices    value   P2L%%  budget    "
                "kept  read_s  simpl_s\n");
   for (std::size_t i = 0; i < stats.pieces.size(); ++i) {
     const auto& p = stats.pieces[i];
     char value[16] = "       -";
     if (values) std::snprintf(value, sizeof value, "%8.6f", p.value);
-    std::fprintf(stderr, "dpts-par: %5zu %5d %5d %5d %6d %8zu %s %6.2f %7zu %7zu %7.2f %8.2f\n", i,
-                 p.piece.col0, p.piece.row0, p.piece.width, p.piece.height, p.piece.vertices, value,
-                 100.0 * p.budget / std::max<std::size_t>(1, p.piece.vertices), p.budget, p.kept,
-                 p.read_s, p.simplify_s);
+    std::fprintf(stderr, DPTS_PROG ": %5zu %5d %5d %5d %6d %8zu %s %6.2f %7zu %7zu %7.2f %8.2f\n",
+                 i, p.piece.col0, p.piece.row0, p.piece.width, p.piece.height, p.piece.vertices,
+                 value, 100.0 * p.budget / std::max<std::size_t>(1, p.piece.vertices), p.budget,
+                 p.kept, p.read_s, p.simplify_s);
   }
   double longest = 0, sum = 0;
   for (const auto& p : stats.pieces) {
@@ -242,13 +252,14 @@ void print_pieces(const dpts::par::MetaStats& stats, bool values) {
     sum += p.read_s + p.simplify_s;
   }
   std::fprintf(stderr,
-               "dpts-par: pieces: longest %.3f s, mean %.3f s (read + simplify); peak memory "
+               DPTS_PROG
+               ": pieces: longest %.3f s, mean %.3f s (read + simplify); peak memory "
                "before the merge %.1f MB, of which kept vertices %.1f MB\n",
                longest, sum / static_cast<double>(std::max<std::size_t>(1, stats.pieces.size())),
                static_cast<double>(stats.peak_rss_before_merge_kb) / 1024.0,
                static_cast<double>(stats.kept_bytes) / (1 << 20));
   std::fprintf(stderr,
-               "dpts-par: stages: count %.2f s, values %.2f s, simplify %.2f s, merge %.2f s\n",
+               DPTS_PROG ": stages: count %.2f s, values %.2f s, simplify %.2f s, merge %.2f s\n",
                stats.count_s, stats.values_s, stats.simplify_s, stats.merge_s);
 }
 
@@ -257,12 +268,12 @@ void print_pieces(const dpts::par::MetaStats& stats, bool values) {
 void after_pieces(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem,
                   const dpts::par::MetaStats& stats, bool values) {
   const std::string absurd = dpts::io::absurd_heights_note(dem, stats.absurd_cells);
-  if (!absurd.empty()) std::cerr << "dpts-par: " << absurd << "\n";
+  if (!absurd.empty()) std::cerr << DPTS_PROG ": " << absurd << "\n";
   if (o.verbose) print_pieces(stats, values);
   if (!o.max_error) {
     warn_kept(stats.kept_vertices, stats.target_vertices);
   } else if (stats.kept_vertices > stats.target_vertices && o.keep_text != "none" && !o.quiet) {
-    std::cerr << "dpts-par: kept " << stats.kept_vertices << " vertices, not "
+    std::cerr << DPTS_PROG ": kept " << stats.kept_vertices << " vertices, not "
               << stats.target_vertices << ": --max-error " << o.max_error_text << " needs them\n";
   }
 }
@@ -292,6 +303,66 @@ std::size_t piece_cache(const dpts::cli::ParOptions& o) {
   return tile_bytes;
 }
 
+// GDAL's settings for the run: --config's, and standard input kept whole.
+void apply_config(const dpts::cli::ParOptions& o) {
+  // A raster on standard input is read more than once (opened, then piece by piece): GDAL
+  // keeps all of it, not its default first 1 MB, unless the user says otherwise.
+  if (o.input.rfind("/vsistdin", 0) == 0 &&
+      !CPLGetConfigOption("CPL_VSISTDIN_BUFFER_LIMIT", nullptr)) {
+    CPLSetConfigOption("CPL_VSISTDIN_BUFFER_LIMIT", "-1");
+  }
+  for (const auto& [key, value] : o.config) CPLSetConfigOption(key.c_str(), value.c_str());
+}
+
+dpts::par::QemEngineOptions qem_options(const dpts::cli::ParOptions& o) {
+  dpts::par::QemEngineOptions qo;
+  qo.keep = o.keep;
+  qo.levels = o.levels;
+  qo.tile_bytes = piece_cache(o);
+  qo.memory_limit_bytes = dpts::cli::memory_limit_bytes(o);
+  if (o.max_error) qo.max_error = *o.max_error;
+  return qo;
+}
+
+#ifdef DPTS_MPI
+// Rank 0's qem engine: plans (as every rank does), gives the word, simplifies its own share of
+// the pieces while the other ranks simplify theirs, receives them and merges all in piece
+// order: the same mesh as simplify_qem's in one process.
+dpts::core::TriMesh simplify_qem_ranks(const dpts::core::RasterSource& source,
+                                       const dpts::par::QemEngineOptions& qo,
+                                       const dpts::core::Progress& progress,
+                                       dpts::par::MetaStats& st) {
+  using namespace dpts;
+  const std::vector<core::Piece> pieces = par::plan_qem(source, qo, progress, st);
+  mpi::go(true);
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<par::QemPieceMesh> outputs;
+  const std::vector<std::size_t> own = mpi::share(pieces.size(), 0, mpi::ranks());
+  // note: progress counts pieces, here and received, so it ends at 100 % of all of them.
+  const double share = pieces.empty() ? 1.0 : static_cast<double>(own.size()) / pieces.size();
+  std::size_t received = 0;
+  try {
+    par::simplify_qem_pieces(
+        source, qo, pieces, own, st, outputs,
+        [&](double f, std::string_view s) { return !progress || progress(f * share, s); });
+  } catch (...) {
+    // The other ranks are sending: take their pieces (dropped) before failing, so none waits.
+    std::vector<par::QemPieceMesh> drop(pieces.size());
+    mpi::receive(drop, st, nullptr);
+    throw;
+  }
+  // note: a stop asked for meanwhile is honoured once every rank's pieces are in.
+  const std::string failure = mpi::receive(outputs, st, [&] {
+    ++received;
+    if (progress) progress(share + static_cast<double>(received) / pieces.size(), "simplify");
+  });
+  if (!failure.empty()) throw dpts::InputError(failure);
+  if (progress && !progress(1.0, "simplify")) throw dpts::Cancelled();
+  st.simplify_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return par::merge_qem(source, qo, outputs, st, progress);
+}
+#endif
+
 // qem in its piece engine (parallel/qem_engine.hpp): out of core, pieces concurrent.
 int run_qem(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer,
             const dpts::core::Progress& progress, std::chrono::steady_clock::time_point start) {
@@ -299,15 +370,14 @@ int run_qem(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer,
   io::DemInfo dem = open_input(o);
   print_notes(dem, o);
   io::AtomicOutputFile out(o.output);
-  par::QemEngineOptions qo;
-  qo.keep = o.keep;
-  qo.levels = o.levels;
-  qo.tile_bytes = piece_cache(o);
-  qo.memory_limit_bytes = cli::memory_limit_bytes(o);
-  if (o.max_error) qo.max_error = *o.max_error;
+  const par::QemEngineOptions qo = qem_options(o);
   par::MetaStats stats;
   const io::GdalRaster source(dem);
+#ifdef DPTS_MPI
+  core::TriMesh result = simplify_qem_ranks(source, qo, progress, stats);
+#else
   core::TriMesh result = par::simplify_qem(source, qo, progress, &stats);
+#endif
   printer.finish();
   after_pieces(o, dem, stats, false);
   const std::size_t faces = result.faces.size();
@@ -341,7 +411,7 @@ int run_meta(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printer
   const auto t_write = std::chrono::steady_clock::now();
   write_output(o, dem, std::move(result.tin), result.z, out);
   if (o.verbose) {
-    std::fprintf(stderr, "dpts-par: stages: write %.2f s\n",
+    std::fprintf(stderr, DPTS_PROG ": stages: write %.2f s\n",
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t_write).count());
   }
   return close_pieces(o, dem, stats, faces, start);
@@ -351,9 +421,16 @@ int run(const dpts::cli::ParOptions& o) {
   using namespace dpts;
   if (o.help || o.version) {
     if (o.help) {
+#ifdef DPTS_MPI
+      std::cout << "Usage: mpirun -q -np N dpts-mpi [OPTIONS] INPUT OUTPUT\n"
+                   "dpts-par's default mode (qem) with its pieces spread over N MPI ranks: the "
+                   "same options\n(not --algo other than qem, not --batch) and the same output, "
+                   "written by rank 0.\nINPUT must be readable on every rank. dpts-par's help "
+                   "follows.\n\n";
+#endif
       std::cout << cli::par_help();
     } else {
-      std::cout << "dpts-par " << DPTS_VERSION << " (GDAL " << GDALVersionInfo("RELEASE_NAME")
+      std::cout << DPTS_PROG " " << DPTS_VERSION << " (GDAL " << GDALVersionInfo("RELEASE_NAME")
                 << ")\n";
     }
     std::cout.flush();
@@ -365,13 +442,16 @@ int run(const dpts::cli::ParOptions& o) {
   g_report.clock.enter("open");
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
                                   static_cast<std::size_t>(threads));
-  // A raster on standard input is read more than once (opened, then piece by piece): GDAL
-  // keeps all of it, not its default first 1 MB, unless the user says otherwise.
-  if (o.input.rfind("/vsistdin", 0) == 0 &&
-      !CPLGetConfigOption("CPL_VSISTDIN_BUFFER_LIMIT", nullptr)) {
-    CPLSetConfigOption("CPL_VSISTDIN_BUFFER_LIMIT", "-1");
+#ifdef DPTS_MPI
+  if (!o.qem) {
+    throw UsageError("--algo " + o.algo_text +
+                     ": dpts-mpi runs the default qem engine only (dpts-par runs the others)");
   }
-  for (const auto& [key, value] : o.config) CPLSetConfigOption(key.c_str(), value.c_str());
+  if (o.input.rfind("/vsistdin", 0) == 0) {
+    throw UsageError("INPUT -: dpts-mpi reads INPUT on every rank, standard input cannot be");
+  }
+#endif
+  apply_config(o);
   if (dpts::cli::same_file(o.input, o.output)) {
     throw UsageError(o.output + ": OUTPUT is the INPUT file; refusing to overwrite it");
   }
@@ -381,7 +461,7 @@ int run(const dpts::cli::ParOptions& o) {
     io::AtomicOutputFile probe(o.report);
   }
   const auto start = std::chrono::steady_clock::now();
-  cli::ProgressPrinter printer("dpts-par", o.quiet, &g_cancel);
+  cli::ProgressPrinter printer(DPTS_PROG, o.quiet, &g_cancel);
   const core::Progress progress = [&](double f, std::string_view s) {
     g_report.clock.enter(s);
     return printer(f, s);
@@ -424,9 +504,81 @@ std::string self_path(const char* argv0) {
   return ec ? std::string(argv0) : p.string();
 }
 
+#ifdef DPTS_MPI
+// A rank other than 0: plans as rank 0 does, and once rank 0 gives the word simplifies its
+// share of the pieces and sends them. Silent: rank 0 says what failed, here or there.
+int run_rank(int argc, char** argv) {
+  using namespace dpts;
+  std::signal(SIGPIPE, SIG_IGN);
+  GDALAllRegister();
+  CPLSetErrorHandler(CPLQuietErrorHandler);
+  if (!CPLGetConfigOption("GDAL_CACHEMAX", nullptr)) CPLSetConfigOption("GDAL_CACHEMAX", "64");
+  std::string error;
+  std::optional<io::DemInfo> dem;
+  std::optional<io::GdalRaster> source;
+  std::optional<tbb::global_control> parallelism;
+  std::vector<core::Piece> pieces;
+  par::MetaStats st;
+  par::QemEngineOptions qo;
+  bool planned = false;
+  try {
+    const cli::ParOptions o = cli::parse_par(std::vector<std::string>(argv + 1, argv + argc));
+    if (!o.help && !o.version && o.batch.empty() && o.qem) {
+      const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
+      parallelism.emplace(tbb::global_control::max_allowed_parallelism,
+                          static_cast<std::size_t>(threads));
+      apply_config(o);
+      dem.emplace(io::open_dem(o.input, read_options(o)));
+      source.emplace(*dem);
+      qo = qem_options(o);
+      pieces = par::plan_qem(*source, qo, nullptr, st);
+      planned = true;
+    }
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  if (!mpi::go(false)) return 0;  // rank 0 failed first, and says why
+  try {
+    if (!planned) throw std::runtime_error(error.empty() ? "could not plan the pieces" : error);
+    std::vector<par::QemPieceMesh> outputs;
+    const std::vector<std::size_t> own = mpi::share(pieces.size(), mpi::rank(), mpi::ranks());
+    par::simplify_qem_pieces(*source, qo, pieces, own, st, outputs, nullptr);
+    for (const std::size_t i : own) {
+      mpi::send_piece(i, par::to_bytes(outputs[i], st.pieces[i]));
+      outputs[i] = {};
+    }
+    mpi::send_end();
+  } catch (const std::exception& e) {
+    mpi::send_error(e.what());
+  }
+  return 0;
+}
+#endif
+
+int par_main(int argc, char** argv);
+
 }  // namespace
 
 int main(int argc, char** argv) {
+#ifdef DPTS_MPI
+  dpts::mpi::init(argc, argv);
+  int code = 0;
+  if (dpts::mpi::rank() != 0) {
+    code = run_rank(argc, argv);
+  } else {
+    code = par_main(argc, argv);
+    if (!dpts::mpi::went()) dpts::mpi::go(false);  // failed before its word: the others stop
+  }
+  dpts::mpi::finalize();
+  return code;
+#else
+  return par_main(argc, argv);
+#endif
+}
+
+namespace {
+
+int par_main(int argc, char** argv) {
   dpts::cli::reopen_closed_std_streams();
   // note: sigaction without SA_RESTART, so a batch's waitpid() returns on a signal. A hang-up
   // (the terminal closed) stops the run as Ctrl-C does; a closed pipe on stderr does not
@@ -452,20 +604,25 @@ int main(int argc, char** argv) {
     const std::string failed = g_report.write(o, status, code, error);
     // A run that failed said why already; one that worked fails now.
     if (failed.empty() || code != 0) return code;
-    std::cerr << "dpts-par: error: report not written: " << failed << "\n";
+    std::cerr << DPTS_PROG ": error: report not written: " << failed << "\n";
     return 1;
   };
   try {
     o = dpts::cli::parse_par(args);
     g_report.path = o.report;
     g_report.args = args;
+#ifdef DPTS_MPI
+    if (!o.batch.empty())
+      throw dpts::UsageError("--batch: not with dpts-mpi (dpts-par runs batches)");
+#endif
     if (!o.batch.empty()) return dpts::cli::run_batch(o, self_path(argv[0]), &g_cancel);
     return report("ok", run(o), "");
   } catch (const dpts::UsageError& e) {
-    std::cerr << "dpts-par: " << e.what() << "\nTry 'dpts-par --help' for more information.\n";
+    std::cerr << DPTS_PROG ": " << e.what()
+              << "\nTry '" DPTS_PROG " --help' for more information.\n";
     return report("failed", 2, e.what());
   } catch (const dpts::Cancelled&) {
-    std::cerr << "\ndpts-par: interrupted; no output written\n";
+    std::cerr << "\n" DPTS_PROG ": interrupted; no output written\n";
     return report("interrupted", 1, "interrupted by a signal; no output written");
   } catch (const std::bad_alloc&) {
     // note: the message is built from what is at hand; the memory asked for is not known.
@@ -473,10 +630,12 @@ int main(int argc, char** argv) {
         "out of memory in stage " + g_report.clock.stage() + " (peak " +
         std::to_string(dpts::par::peak_rss_kb() >> 10) +
         " MB); lower --tile-mb or --threads, or set --max-memory to be refused up front";
-    std::cerr << "dpts-par: error: " << why << "\n";
+    std::cerr << DPTS_PROG ": error: " << why << "\n";
     return report("failed", 1, why);
   } catch (const std::exception& e) {
-    std::cerr << "dpts-par: error: " << e.what() << "\n";
+    std::cerr << DPTS_PROG ": error: " << e.what() << "\n";
     return report("failed", 1, e.what());
   }
 }
+
+}  // namespace

@@ -6,9 +6,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <list>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -207,24 +209,9 @@ class BlockCache {
   std::uint64_t last_key_ = 0;
 };
 
-// What a piece hands to the merge.
-struct PieceMesh {
-  core::TriMesh mesh;  // frame units
-  std::vector<core::Quadric> quadrics;
-  std::vector<std::uint64_t> cell;  // per vertex: its raster cell (where it started)
-  std::vector<char> seam;           // per vertex: shared with another piece's window
-  std::vector<double> plane_xy;     // per vertex: x, y on the grid (reprojected DEMs only)
-  std::size_t bytes() const {
-    return (mesh.xyz.capacity() + plane_xy.capacity()) * sizeof(double) +
-           mesh.faces.capacity() * sizeof(mesh.faces[0]) +
-           quadrics.capacity() * sizeof(core::Quadric) + cell.capacity() * sizeof(std::uint64_t) +
-           seam.capacity();
-  }
-};
-
-PieceMesh simplify_piece(const core::RasterSource& dem, const Positions& positions,
-                         const core::Piece& p, double fraction, const QemEngineOptions& options,
-                         PieceReport& report, const core::Progress& progress) {
+QemPieceMesh simplify_piece(const core::RasterSource& dem, const Positions& positions,
+                            const core::Piece& p, double fraction, const QemEngineOptions& options,
+                            PieceReport& report, const core::Progress& progress) {
   // The piece's cells and one more column and row (the next pieces' first): the grid squares
   // whose top-left corner is the piece's.
   const int wc0 = p.col0, wr0 = p.row0;
@@ -234,7 +221,7 @@ PieceMesh simplify_piece(const core::RasterSource& dem, const Positions& positio
   core::HeightGrid grid = read_window(dem, wc0, wr0, ww, wh, report.read_s);
   const auto t0 = std::chrono::steady_clock::now();
   const core::GridTin tin = core::grid_tin(grid, core::delaunay_diagonal(dem.frame()));
-  PieceMesh out;
+  QemPieceMesh out;
   if (tin.faces.empty()) return out;
   const double unit = dem.frame().metres_per_unit;
   core::TriMesh mesh;
@@ -317,6 +304,10 @@ PieceMesh simplify_piece(const core::RasterSource& dem, const Positions& positio
   return out;
 }
 
+double qem_fraction(const MetaStats& st) {
+  return static_cast<double>(st.target_vertices) / static_cast<double>(st.input_vertices);
+}
+
 }  // namespace
 
 // note: the collapse's time per vertex grows with its mesh (its queue and arrays leave the
@@ -325,51 +316,72 @@ PieceMesh simplify_piece(const core::RasterSource& dem, const Positions& positio
 // (which also gives more threads work). Pieces of DEMs up to 16 x this are as before.
 constexpr std::size_t kQemPieceVertices = 1 << 16;
 
-core::TriMesh simplify_qem(const core::RasterSource& dem, const QemEngineOptions& options,
-                           const core::Progress& progress, MetaStats* stats) {
-  MetaStats local;
-  MetaStats& st = stats ? *stats : local;
+std::vector<core::Piece> plan_qem(const core::RasterSource& dem, const QemEngineOptions& options,
+                                  const core::Progress& progress, MetaStats& st) {
   const auto bytes = options.tile_bytes;
-
-  // 1. Count surface vertices per block, streaming; divide.
   const std::vector<core::Piece> pieces =
       divide_dem(dem, options.keep, options.levels, bytes, 1, progress, st, kQemPieceVertices);
-  const double fraction =
-      static_cast<double>(st.target_vertices) / static_cast<double>(st.input_vertices);
   const double kept =
-      std::min(1.0, options.slack * fraction) * static_cast<double>(st.input_vertices);
+      std::min(1.0, options.slack * qem_fraction(st)) * static_cast<double>(st.input_vertices);
   check_memory(dem, st.target_vertices,
                static_cast<std::size_t>(kept * kQemBytesPerKeptVertex) +
                    pieces_in_flight_bytes(pieces, 1, bytes),
                options.memory_limit_bytes);
+  return pieces;
+}
 
+void simplify_qem_pieces(const core::RasterSource& dem, const QemEngineOptions& options,
+                         const std::vector<core::Piece>& pieces,
+                         const std::vector<std::size_t>& which, MetaStats& st,
+                         std::vector<QemPieceMesh>& outputs, const core::Progress& progress) {
+  const double fraction = qem_fraction(st);
+  const Positions positions(dem);
+  outputs.resize(pieces.size());
+  SharedProgress shared(progress, which.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, which.size(), 1),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                        shared.check();
+                        const std::size_t i = which[k];
+                        const core::Progress piece_progress = [&](double fr, std::string_view) {
+                          return shared.update(k, fr, "simplify");
+                        };
+                        outputs[i] = simplify_piece(dem, positions, pieces[i], fraction, options,
+                                                    st.pieces[i], piece_progress);
+                        release_free_memory();
+                        shared.update(k, 1.0, "simplify");
+                      }
+                    });
+  shared.check();
+}
+
+core::TriMesh simplify_qem(const core::RasterSource& dem, const QemEngineOptions& options,
+                           const core::Progress& progress, MetaStats* stats) {
+  MetaStats local;
+  MetaStats& st = stats ? *stats : local;
+  // 1. Count surface vertices per block, streaming; divide.
+  const std::vector<core::Piece> pieces = plan_qem(dem, options, progress, st);
   // 2. Simplify the pieces concurrently, seams locked.
   auto t0 = std::chrono::steady_clock::now();
-  const Positions positions(dem);
-  std::vector<PieceMesh> outputs(pieces.size());
-  {
-    SharedProgress shared(progress, pieces.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pieces.size(), 1),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                          shared.check();
-                          const core::Progress piece_progress = [&](double fr, std::string_view) {
-                            return shared.update(i, fr, "simplify");
-                          };
-                          outputs[i] = simplify_piece(dem, positions, pieces[i], fraction, options,
-                                                      st.pieces[i], piece_progress);
-                          release_free_memory();
-                          shared.update(i, 1.0, "simplify");
-                        }
-                      });
-    shared.check();
-  }
+  std::vector<std::size_t> all(pieces.size());
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+  std::vector<QemPieceMesh> outputs;
+  simplify_qem_pieces(dem, options, pieces, all, st, outputs, progress);
   st.simplify_s = seconds_since(t0);
+  // 3. Stitch at the seams, then collapse on to the target.
+  return merge_qem(dem, options, outputs, st, progress);
+}
+
+core::TriMesh merge_qem(const core::RasterSource& dem, const QemEngineOptions& options,
+                        std::vector<QemPieceMesh>& outputs, MetaStats& st,
+                        const core::Progress& progress) {
+  const auto bytes = options.tile_bytes;
+  const Positions positions(dem);
   st.peak_rss_before_merge_kb = peak_rss_kb();
   for (const auto& o : outputs) st.kept_bytes += o.bytes();
 
-  // 3. Stitch at the seams (in k-d order), then collapse on to the target in one order.
-  t0 = std::chrono::steady_clock::now();
+  // Stitch at the seams (in k-d order), then collapse on to the target in one order.
+  auto t0 = std::chrono::steady_clock::now();
   if (progress && !progress(0.0, "merge")) throw Cancelled();
   core::TriMesh merged;
   core::QemOptions qo;
@@ -378,14 +390,14 @@ core::TriMesh simplify_qem(const core::RasterSource& dem, const QemEngineOptions
   {
     // Sized once: growing by doubling would briefly hold twice the merge's largest arrays.
     std::size_t vertices = 0, faces = 0;
-    for (const PieceMesh& o : outputs) vertices += o.cell.size(), faces += o.mesh.faces.size();
+    for (const QemPieceMesh& o : outputs) vertices += o.cell.size(), faces += o.mesh.faces.size();
     merged.xyz.reserve(3 * vertices);
     merged.faces.reserve(faces);
     qo.quadrics.reserve(vertices);
     if (positions.projected) qo.plane_xy.reserve(2 * vertices);
     cell.reserve(vertices);
   }
-  for (PieceMesh& o : outputs) {
+  for (QemPieceMesh& o : outputs) {
     std::vector<std::uint32_t> id(o.cell.size());
     for (std::size_t v = 0; v < o.cell.size(); ++v) {
       if (o.seam[v]) {
@@ -438,6 +450,73 @@ core::TriMesh simplify_qem(const core::RasterSource& dem, const QemEngineOptions
   positions.to_output(r.mesh);
   st.merge_s = seconds_since(t0);
   return std::move(r.mesh);
+}
+
+namespace {
+
+// note: the bytes of a machine to another of the same build (dpts-mpi's ranks): arrays as they
+// lie in memory, each after its length.
+template <typename T>
+void put(std::string& out, const T* data, std::size_t n) {
+  const std::uint64_t len = n;
+  out.append(reinterpret_cast<const char*>(&len), sizeof(len));
+  out.append(reinterpret_cast<const char*>(data), n * sizeof(T));
+}
+
+template <typename T>
+void take(const std::string& in, std::size_t& at, std::vector<T>& v) {
+  std::uint64_t len = 0;
+  if (in.size() - at < sizeof(len)) throw std::runtime_error("qem piece bytes: truncated");
+  std::memcpy(&len, in.data() + at, sizeof(len));
+  at += sizeof(len);
+  if (len > (in.size() - at) / sizeof(T)) throw std::runtime_error("qem piece bytes: truncated");
+  v.resize(len);
+  std::memcpy(v.data(), in.data() + at, len * sizeof(T));
+  at += len * sizeof(T);
+}
+
+}  // namespace
+
+std::string to_bytes(const QemPieceMesh& m, const PieceReport& report) {
+  std::string out;
+  const double rep[2] = {report.read_s, report.simplify_s};
+  const std::uint64_t counts[2] = {report.budget, report.kept};
+  put(out, counts, 2);
+  put(out, rep, 2);
+  put(out, m.mesh.xyz.data(), m.mesh.xyz.size());
+  put(out, m.mesh.faces.data(), m.mesh.faces.size());
+  put(out, m.quadrics.data(), m.quadrics.size());
+  put(out, m.cell.data(), m.cell.size());
+  put(out, m.seam.data(), m.seam.size());
+  put(out, m.plane_xy.data(), m.plane_xy.size());
+  return out;
+}
+
+void from_bytes(const std::string& in, QemPieceMesh& m, PieceReport& report) {
+  std::size_t at = 0;
+  std::vector<std::uint64_t> counts;
+  std::vector<double> rep;
+  take(in, at, counts);
+  take(in, at, rep);
+  take(in, at, m.mesh.xyz);
+  take(in, at, m.mesh.faces);
+  take(in, at, m.quadrics);
+  take(in, at, m.cell);
+  take(in, at, m.seam);
+  take(in, at, m.plane_xy);
+  const std::size_t n = m.cell.size();
+  if (counts.size() != 2 || rep.size() != 2 || at != in.size() || m.mesh.xyz.size() != 3 * n ||
+      m.quadrics.size() != n || m.seam.size() != n ||
+      (!m.plane_xy.empty() && m.plane_xy.size() != 2 * n)) {
+    throw std::runtime_error("qem piece bytes: inconsistent");
+  }
+  for (const auto& f : m.mesh.faces) {
+    if (f[0] >= n || f[1] >= n || f[2] >= n) throw std::runtime_error("qem piece bytes: bad face");
+  }
+  report.budget = counts[0];
+  report.kept = counts[1];
+  report.read_s = rep[0];
+  report.simplify_s = rep[1];
 }
 
 }  // namespace dpts::par

@@ -20,8 +20,12 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
 
 #include "core/elimination.hpp"
+#include "core/qem.hpp"
 #include "core/raster_source.hpp"
 #include "core/steiner_graph.hpp"
 #include "parallel/meta.hpp"
@@ -48,10 +52,51 @@ struct QemEngineOptions {
 // mesh being collapsed), measured with some margin.
 inline constexpr std::size_t kQemBytesPerKeptVertex = 700;
 
+// What a piece hands to the merge: its simplified mesh (frame units), and per vertex its
+// quadric, its raster cell (where it started), whether it lies on a seam (shared with another
+// piece's window), and its x, y on the grid (reprojected DEMs only).
+struct QemPieceMesh {
+  core::TriMesh mesh;
+  std::vector<core::Quadric> quadrics;
+  std::vector<std::uint64_t> cell;
+  std::vector<char> seam;
+  std::vector<double> plane_xy;
+  std::size_t bytes() const {
+    return (mesh.xyz.capacity() + plane_xy.capacity()) * sizeof(double) +
+           mesh.faces.capacity() * sizeof(mesh.faces[0]) +
+           quadrics.capacity() * sizeof(core::Quadric) + cell.capacity() * sizeof(std::uint64_t) +
+           seam.capacity();
+  }
+};
+
 // Runs the engine on band 1. The mesh is in the output CRS (heights in metres), faces
 // counter-clockwise. stats gets the counts, the pieces (value 0) and
 // the stage times. Progress stages "count", "simplify", "merge"; false stops with Cancelled.
 core::TriMesh simplify_qem(const core::RasterSource& dem, const QemEngineOptions& options,
                            const core::Progress& progress, MetaStats* stats = nullptr);
+
+// The engine in its three stages, for running the pieces elsewhere (dpts-mpi): every process
+// plans the same pieces, each simplifies its share, and one merges them all; the mesh is the
+// same bytes as simplify_qem's, which is these three in one process.
+// 1. The streaming count, the division and the memory check: the pieces, in k-d order; st
+// gets the counts and a report per piece.
+std::vector<core::Piece> plan_qem(const core::RasterSource& dem, const QemEngineOptions& options,
+                                  const core::Progress& progress, MetaStats& st);
+// 2. Pieces `which` (indices into pieces) simplified concurrently into outputs[i] (outputs
+// sized to the pieces), their reports into st.pieces[i]. Progress stage "simplify".
+void simplify_qem_pieces(const core::RasterSource& dem, const QemEngineOptions& options,
+                         const std::vector<core::Piece>& pieces,
+                         const std::vector<std::size_t>& which, MetaStats& st,
+                         std::vector<QemPieceMesh>& outputs, const core::Progress& progress);
+// 3. All pieces' outputs (emptied) stitched at the seams in piece order and collapsed on to
+// the target: the mesh in the output CRS. Progress stage "merge".
+core::TriMesh merge_qem(const core::RasterSource& dem, const QemEngineOptions& options,
+                        std::vector<QemPieceMesh>& outputs, MetaStats& st,
+                        const core::Progress& progress);
+
+// A piece's output and report as bytes for another process of the same build, and back;
+// from_bytes throws std::runtime_error on bytes that are not one.
+std::string to_bytes(const QemPieceMesh& mesh, const PieceReport& report);
+void from_bytes(const std::string& bytes, QemPieceMesh& mesh, PieceReport& report);
 
 }  // namespace dpts::par

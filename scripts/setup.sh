@@ -6,7 +6,7 @@ root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
 packages=(build-essential cmake ninja-build libcgal-dev libboost-dev libgmp-dev libmpfr-dev
           libeigen3-dev libtbb-dev libgdal-dev gdal-bin catch2 libbenchmark-dev time python3 bc
-          gnuplot-nox)  # gnuplot: bench/scaling_sizes.sh draws its PNG
+          gnuplot-nox openmpi-bin libopenmpi-dev)  # gnuplot: bench/scaling_sizes.sh; MPI: dpts-mpi
 sudo=""
 [[ $(id -u) -eq 0 ]] || sudo="sudo"
 missing=()
