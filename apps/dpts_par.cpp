@@ -356,6 +356,7 @@ dpts::core::TriMesh simplify_qem_ranks(const dpts::core::RasterSource& source,
     ++received;
     if (progress) progress(share + static_cast<double>(received) / pieces.size(), "simplify");
   });
+  if (g_cancel.load() != 0) throw dpts::Cancelled();  // every rank was told, and stopped
   if (!failure.empty()) throw dpts::InputError(failure);
   if (progress && !progress(1.0, "simplify")) throw dpts::Cancelled();
   st.simplify_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -504,12 +505,25 @@ std::string self_path(const char* argv0) {
   return ec ? std::string(argv0) : p.string();
 }
 
+// SIGINT, SIGTERM and SIGHUP set g_cancel (without SA_RESTART); SIGPIPE is ignored.
+void catch_signals() {
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+  sigaction(SIGHUP, &sa, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
+}
+
 #ifdef DPTS_MPI
 // A rank other than 0: plans as rank 0 does, and once rank 0 gives the word simplifies its
 // share of the pieces and sends them. Silent: rank 0 says what failed, here or there.
 int run_rank(int argc, char** argv) {
   using namespace dpts;
-  std::signal(SIGPIPE, SIG_IGN);
+  // note: mpirun passes a Ctrl-C on to every rank: this one stops as rank 0 does, and says so.
+  catch_signals();
+  const core::Progress stop = [](double, std::string_view) { return g_cancel.load() == 0; };
   GDALAllRegister();
   CPLSetErrorHandler(CPLQuietErrorHandler);
   if (!CPLGetConfigOption("GDAL_CACHEMAX", nullptr)) CPLSetConfigOption("GDAL_CACHEMAX", "64");
@@ -531,7 +545,7 @@ int run_rank(int argc, char** argv) {
       dem.emplace(io::open_dem(o.input, read_options(o)));
       source.emplace(*dem);
       qo = qem_options(o);
-      pieces = par::plan_qem(*source, qo, nullptr, st);
+      pieces = par::plan_qem(*source, qo, stop, st);
       planned = true;
     }
   } catch (const std::exception& e) {
@@ -542,14 +556,14 @@ int run_rank(int argc, char** argv) {
     if (!planned) throw std::runtime_error(error.empty() ? "could not plan the pieces" : error);
     std::vector<par::QemPieceMesh> outputs;
     const std::vector<std::size_t> own = mpi::share(pieces.size(), mpi::rank(), mpi::ranks());
-    par::simplify_qem_pieces(*source, qo, pieces, own, st, outputs, nullptr);
+    par::simplify_qem_pieces(*source, qo, pieces, own, st, outputs, stop);
     for (const std::size_t i : own) {
       mpi::send_piece(i, par::to_bytes(outputs[i], st.pieces[i]));
       outputs[i] = {};
     }
     mpi::send_end();
   } catch (const std::exception& e) {
-    mpi::send_error(e.what());
+    mpi::send_error(e.what());  // Cancelled's: "interrupted"
   }
   return 0;
 }
@@ -583,13 +597,7 @@ int par_main(int argc, char** argv) {
   // note: sigaction without SA_RESTART, so a batch's waitpid() returns on a signal. A hang-up
   // (the terminal closed) stops the run as Ctrl-C does; a closed pipe on stderr does not
   // kill it (the write fails instead), so the temporary file is always removed.
-  struct sigaction sa {};
-  sa.sa_handler = on_signal;
-  sigemptyset(&sa.sa_mask);
-  sigaction(SIGINT, &sa, nullptr);
-  sigaction(SIGTERM, &sa, nullptr);
-  sigaction(SIGHUP, &sa, nullptr);
-  std::signal(SIGPIPE, SIG_IGN);
+  catch_signals();
   GDALAllRegister();
   // Every thread's: GDAL's errors become our one-line messages (a pushed handler is the
   // calling thread's only, and worker threads printed GDAL's own lines).

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <csignal>
 #include <cstdlib>
 #include <limits>
 
@@ -15,13 +16,14 @@ using namespace dpts;
 namespace {
 
 // mpirun with n ranks of dpts-mpi (as root too; more ranks than cores).
-test::RunResult mpirun(int n, const std::vector<std::string>& args) {
+test::RunResult mpirun(int n, const std::vector<std::string>& args,
+                       const test::RunOptions& options = {}) {
   setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
   setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
   // note: -q: mpirun adds no banner of its own to a rank's failure.
   std::vector<std::string> all = {"-q", "-np", std::to_string(n), "--oversubscribe", DPTS_MPI_EXE};
   all.insert(all.end(), args.begin(), args.end());
-  return test::run(DPTS_MPIEXEC, all);
+  return test::run(DPTS_MPIEXEC, all, options);
 }
 
 std::string hills(const test::TempDir& dir) {
@@ -95,6 +97,26 @@ TEST_CASE("dpts-mpi fails with one line from rank 0 and no output", "[cli][mpi]"
     CHECK(lines == (c.code == 2 ? 2 : 1));  // usage errors add a pointer to --help
     CHECK_FALSE(std::filesystem::exists(out));
   }
+}
+
+TEST_CASE("Ctrl-C stops every rank of dpts-mpi, one line and no output", "[cli][mpi][robust]") {
+  test::TempDir dir;
+  const auto dem = (dir / "dem.tif").string();
+  test::write_geotiff(
+      dem,
+      test::make_grid(
+          1500, 1500,
+          [](int c, int r) { return 500.0 + 40.0 * std::sin(c * 0.05) * std::cos(r * 0.07); }),
+      {400000, 10, 0, 3800000, 0, -10}, test::epsg_wkt(32611));
+  test::RunOptions ro;
+  ro.signal = SIGINT;  // to mpirun, which passes it on to every rank
+  ro.signal_when = "simplify";
+  ro.signal_after_s = 60;
+  const auto r = mpirun(2, {"--threads", "1", dem, (dir / "out.ply").string()}, ro);
+  INFO(r.err);
+  CHECK(r.exit_code == 1);
+  CHECK(r.err.find("dpts-mpi: interrupted; no output written\n") != std::string::npos);
+  CHECK(dir.files() == std::vector<std::string>{"dem.tif"});
 }
 
 #endif
