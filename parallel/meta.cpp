@@ -69,10 +69,16 @@ core::BlockCounts count_blocks(const core::RasterSource& dem, std::size_t strip_
     implausible.row0 = r0;
     implausible.row1 = r1;
     const core::HeightGrid g = dem.read(0, a, dem.width(), b - a, &implausible);
-    for (int r = r0 - a; r < r1 - a; ++r) {
-      for (int c = 0; c < g.width; ++c) *valid_cells += g.is_valid(c, r) ? 1 : 0;
+    std::size_t valid = 0;
+    const auto own_end = g.z.begin() + static_cast<std::ptrdiff_t>(g.index(0, r1 - a));
+    for (auto z = g.z.begin() + static_cast<std::ptrdiff_t>(g.index(0, r0 - a)); z != own_end;
+         ++z) {
+      valid += std::isnan(*z) ? 0 : 1;
     }
-    for (std::uint32_t cell : core::surface_cells(g)) {
+    *valid_cells += valid;
+    // note: a strip of no-data has no surface vertex: not searched (8e8 no-data cells of a
+    // dense DEFLATE GeoTIFF: about 15 % off the count).
+    for (std::uint32_t cell : valid ? core::surface_cells(g) : std::vector<std::uint32_t>{}) {
       const int row = static_cast<int>(cell / static_cast<std::uint32_t>(g.width)) + a;
       const int col = static_cast<int>(cell % static_cast<std::uint32_t>(g.width));
       if (row < r0 || row >= r1) continue;
