@@ -106,3 +106,36 @@ TEST_CASE("k-d division splits at the median of uneven counts and drops empty pi
   opt.levels = 3;
   for (const auto& p : core::kd_divide(bc, opt)) CHECK(p.vertices > 0);
 }
+
+TEST_CASE("a piece whose window would reach 2^32 cells is split, whatever the budget",
+          "[core][kd]") {
+  // 100000 x 100000 cells in blocks of 1000, surface in two far corners only; no levels, no
+  // vertex cap, a budget that takes anything: only the 32-bit window rule splits.
+  core::BlockCounts bc;
+  bc.width = bc.height = 100000;
+  bc.block = 1000;
+  bc.blocks_x = bc.blocks_y = 100;
+  bc.counts.assign(100 * 100, 0);
+  bc.counts[0] = 50;
+  bc.counts[100 * 100 - 1] = 70;
+  core::DivisionOptions o;
+  o.levels = 0;
+  o.budget_bytes = ~std::size_t{0};
+  o.halo = 1;
+  const auto pieces = core::kd_divide(bc, o);
+  REQUIRE(pieces.size() >= 2);
+  std::size_t vertices = 0;
+  for (const auto& p : pieces) {
+    vertices += p.vertices;
+    const double window = (p.width + 2.0) * (p.height + 2.0);
+    CHECK(window < 4294967295.0);
+  }
+  CHECK(vertices == 120);
+  // A raster under 2^32 cells keeps one piece.
+  bc.width = bc.height = 60000;
+  bc.blocks_x = bc.blocks_y = 60;
+  bc.counts.assign(60 * 60, 0);
+  bc.counts[0] = 50;
+  bc.counts[60 * 60 - 1] = 70;
+  CHECK(core::kd_divide(bc, o).size() == 1);
+}
