@@ -4,7 +4,6 @@
 #include <cpl_error.h>
 #include <gdal_priv.h>
 #include <tbb/global_control.h>
-#include <tbb/info.h>
 
 #include <algorithm>
 #include <atomic>
@@ -270,7 +269,7 @@ int run(const Options& o) {
     }
   }
   const auto start = std::chrono::steady_clock::now();
-  const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
+  const int threads = dpts::cli::thread_count(o.threads);
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
                                   static_cast<std::size_t>(threads));
   const io::Dem dem = io::read_dem(o.dem, io::DemReadOptions{o.t_srs}, nullptr);

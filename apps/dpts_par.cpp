@@ -5,7 +5,6 @@
 #include <cpl_error.h>
 #include <gdal_priv.h>
 #include <tbb/global_control.h>
-#include <tbb/info.h>
 
 #include <algorithm>
 #include <atomic>
@@ -438,7 +437,7 @@ int run(const dpts::cli::ParOptions& o) {
     if (!std::cout) throw IoError("cannot write to standard output");
     return 0;
   }
-  const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
+  const int threads = cli::thread_count(o.threads);
   g_report.threads = threads;
   g_report.clock.enter("open");
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
@@ -505,8 +504,12 @@ std::string self_path(const char* argv0) {
   return ec ? std::string(argv0) : p.string();
 }
 
-// SIGINT, SIGTERM and SIGHUP set g_cancel (without SA_RESTART); SIGPIPE is ignored.
-void catch_signals() {
+// What every process (and every rank of dpts-mpi) sets up first: signals and GDAL.
+void start_process() {
+  // note: sigaction without SA_RESTART, so a batch's waitpid() returns on a signal. A hang-up
+  // (the terminal closed) stops the run as Ctrl-C does; a closed pipe on stderr does not
+  // kill it (the write fails instead), so the temporary file is always removed. mpirun passes
+  // a Ctrl-C on to every rank: each stops as rank 0 does.
   struct sigaction sa {};
   sa.sa_handler = on_signal;
   sigemptyset(&sa.sa_mask);
@@ -514,6 +517,13 @@ void catch_signals() {
   sigaction(SIGTERM, &sa, nullptr);
   sigaction(SIGHUP, &sa, nullptr);
   std::signal(SIGPIPE, SIG_IGN);
+  GDALAllRegister();
+  // Every thread's: GDAL's errors become our one-line messages (a pushed handler is the
+  // calling thread's only, and worker threads printed GDAL's own lines).
+  CPLSetErrorHandler(CPLQuietErrorHandler);
+  // A bounded block cache: GDAL's default (5 % of RAM) would cache the whole raster.
+  g_user_cache = CPLGetConfigOption("GDAL_CACHEMAX", nullptr) != nullptr;
+  if (!g_user_cache) CPLSetConfigOption("GDAL_CACHEMAX", "64");
 }
 
 #ifdef DPTS_MPI
@@ -521,12 +531,8 @@ void catch_signals() {
 // share of the pieces and sends them. Silent: rank 0 says what failed, here or there.
 int run_rank(int argc, char** argv) {
   using namespace dpts;
-  // note: mpirun passes a Ctrl-C on to every rank: this one stops as rank 0 does, and says so.
-  catch_signals();
+  start_process();
   const core::Progress stop = [](double, std::string_view) { return g_cancel.load() == 0; };
-  GDALAllRegister();
-  CPLSetErrorHandler(CPLQuietErrorHandler);
-  if (!CPLGetConfigOption("GDAL_CACHEMAX", nullptr)) CPLSetConfigOption("GDAL_CACHEMAX", "64");
   std::string error;
   std::optional<io::DemInfo> dem;
   std::optional<io::GdalRaster> source;
@@ -538,9 +544,8 @@ int run_rank(int argc, char** argv) {
   try {
     const cli::ParOptions o = cli::parse_par(std::vector<std::string>(argv + 1, argv + argc));
     if (!o.help && !o.version && o.batch.empty() && o.qem) {
-      const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
       parallelism.emplace(tbb::global_control::max_allowed_parallelism,
-                          static_cast<std::size_t>(threads));
+                          static_cast<std::size_t>(cli::thread_count(o.threads)));
       apply_config(o);
       dem.emplace(io::open_dem(o.input, read_options(o)));
       source.emplace(*dem);
@@ -594,17 +599,7 @@ namespace {
 
 int par_main(int argc, char** argv) {
   dpts::cli::reopen_closed_std_streams();
-  // note: sigaction without SA_RESTART, so a batch's waitpid() returns on a signal. A hang-up
-  // (the terminal closed) stops the run as Ctrl-C does; a closed pipe on stderr does not
-  // kill it (the write fails instead), so the temporary file is always removed.
-  catch_signals();
-  GDALAllRegister();
-  // Every thread's: GDAL's errors become our one-line messages (a pushed handler is the
-  // calling thread's only, and worker threads printed GDAL's own lines).
-  CPLSetErrorHandler(CPLQuietErrorHandler);
-  // A bounded block cache: GDAL's default (5 % of RAM) would cache the whole raster.
-  g_user_cache = CPLGetConfigOption("GDAL_CACHEMAX", nullptr) != nullptr;
-  if (!g_user_cache) CPLSetConfigOption("GDAL_CACHEMAX", "64");
+  start_process();
   const std::vector<std::string> args(argv + 1, argv + argc);
   dpts::cli::ParOptions o;
   auto report = [&](const std::string& status, int code, const std::string& error) {
