@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cstdlib>
 
+#include "core/grid.hpp"
+
 namespace dpts::core {
 namespace {
 
@@ -57,7 +59,8 @@ std::vector<Piece> kd_divide(const BlockCounts& bc, const DivisionOptions& optio
     // note: a window (the piece and its halo) is a core grid, indexed in 32 bits.
     const double window_cells = (static_cast<double>(piece.width) + 2 * options.halo) *
                                 (static_cast<double>(piece.height) + 2 * options.halo);
-    const bool want = item.depth < options.levels || window_cells >= 4294967295.0 ||
+    const bool want = item.depth < options.levels ||
+                      window_cells >= static_cast<double>(kMaxGridCells) ||
                       piece_bytes(piece, options.halo) > options.budget_bytes ||
                       (options.max_vertices > 0 && n > options.max_vertices);
     const int nx = r.bx1 - r.bx0, ny = r.by1 - r.by0;

@@ -56,16 +56,8 @@ core::BlockCounts count_blocks(const core::RasterSource& dem, std::size_t strip_
   strip = std::max(dem.block_height(), strip / dem.block_height() * dem.block_height());
   core::RasterSource::Implausible implausible;
   *valid_cells = 0;
-  for (int r0 = 0; r0 < dem.height(); r0 += strip) {
-    const int r1 = std::min(dem.height(), r0 + strip);
-    // One row more on each side: whether a cell is a surface vertex depends on its neighbours.
-    const int a = std::max(0, r0 - 1), b = std::min(dem.height(), r1 + 1);
-    // note: a region GDAL knows to be empty (a sparse file's unwritten blocks) is not read:
-    // a raster of 70000 x 70000 cells, no-data but for a small window, is counted in seconds.
-    if (dem.empty(0, a, dem.width(), b - a)) {
-      if (progress && !progress(static_cast<double>(r1) / dem.height(), "count")) throw Cancelled();
-      continue;
-    }
+  // Counts rows [r0, r1) from the strip of rows [a, b) that holds them.
+  auto count_strip = [&](int a, int b, int r0, int r1) {
     implausible.row0 = r0;
     implausible.row1 = r1;
     const core::HeightGrid g = dem.read(0, a, dem.width(), b - a, &implausible);
@@ -78,12 +70,21 @@ core::BlockCounts count_blocks(const core::RasterSource& dem, std::size_t strip_
     *valid_cells += valid;
     // note: a strip of no-data has no surface vertex: not searched (8e8 no-data cells of a
     // dense DEFLATE GeoTIFF: about 15 % off the count).
-    for (std::uint32_t cell : valid ? core::surface_cells(g) : std::vector<std::uint32_t>{}) {
+    if (valid == 0) return;
+    for (std::uint32_t cell : core::surface_cells(g)) {
       const int row = static_cast<int>(cell / static_cast<std::uint32_t>(g.width)) + a;
       const int col = static_cast<int>(cell % static_cast<std::uint32_t>(g.width));
       if (row < r0 || row >= r1) continue;
       ++bc.counts[static_cast<std::size_t>(row / bc.block) * bc.blocks_x + col / bc.block];
     }
+  };
+  for (int r0 = 0; r0 < dem.height(); r0 += strip) {
+    const int r1 = std::min(dem.height(), r0 + strip);
+    // One row more on each side: whether a cell is a surface vertex depends on its neighbours.
+    const int a = std::max(0, r0 - 1), b = std::min(dem.height(), r1 + 1);
+    // note: a region GDAL knows to be empty (a sparse file's unwritten blocks) is not read:
+    // a raster of 70000 x 70000 cells, no-data but for a small window, is counted in seconds.
+    if (!dem.empty(0, a, dem.width(), b - a)) count_strip(a, b, r0, r1);
     if (progress && !progress(static_cast<double>(r1) / dem.height(), "count")) throw Cancelled();
   }
   *absurd_cells = implausible.cells;
