@@ -17,9 +17,9 @@ opts=("$@")
 [[ " ${opts[*]} " == *" --algo "* ]] || opts=(--algo vp-meta "${opts[@]}")
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-threads=()
-for ((t = 1; t < max; t *= 2)); do threads+=("$t"); done
-threads+=("$max")
+# shellcheck source=bench/timing.sh
+source "$root/bench/timing.sh"
+mapfile -t threads < <(thread_counts "$max")
 echo "threads,run,wall_s,peak_rss_kb,rss_before_merge_kb,kept_kb,sha256,count_s,values_s,simplify_s,merge_s,write_s,pieces,longest_piece_s,mean_piece_s"
 for ((run = 1; run <= runs; ++run)); do
   for t in "${threads[@]}"; do

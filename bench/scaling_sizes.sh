@@ -17,11 +17,9 @@ max=${MAX_THREADS:-$(nproc)}
 png=${PNG:-scaling.png}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-threads=()
-for ((t = 1; t < max; t *= 2)); do threads+=("$t"); done
-threads+=("$max")
 # shellcheck source=bench/timing.sh
 source "$root/bench/timing.sh"
+mapfile -t threads < <(thread_counts "$max")
 res=$(raster_cell_size "$dem")
 inputs=("$dem")
 for f in 2 4; do

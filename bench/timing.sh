@@ -1,5 +1,6 @@
-# Shared by the bench scripts that time whole runs (sourced, not run): speed_table.sh and
-# scaling_sizes.sh. Callers set `tmp` (a scratch folder) and `runs` first.
+# Shared by the bench scripts that time whole runs (sourced, not run): speed_table.sh,
+# scaling_sizes.sh, scaling.sh and out_of_core.sh. Callers of timed set `tmp` (a scratch
+# folder) and `runs` first.
 
 # The median of the numbers on stdin, one a line (mawk has no asort: sorted by sort -g).
 median() {
@@ -17,6 +18,13 @@ timed() {
   wall=$(awk '{print $1}' "$tmp/times" | median)
   cpu=$(awk '{print $2 + $3}' "$tmp/times" | median)
   rss=$(awk '{print $4}' "$tmp/times" | median)
+}
+
+# Thread counts 1, 2, 4, ... below $1, then $1 itself, one a line.
+thread_counts() {
+  local t
+  for ((t = 1; t < $1; t *= 2)); do echo "$t"; done
+  echo "$1"
 }
 
 # The raster's cell count, and its cell size (absolute x pixel size), by gdalinfo.
