@@ -112,8 +112,6 @@ std::vector<std::string> TempDir::files() const {
   return names;
 }
 
-namespace {}  // namespace
-
 std::string file_bytes(const std::filesystem::path& p) {
   std::ifstream in(p, std::ios::binary);
   std::ostringstream ss;
