@@ -40,8 +40,8 @@ bool is_raster_name(const fs::path& p) {
 
 bool is_sidecar(const fs::path& p) {
   const std::string name = p.filename().string();
-  static const char* suffixes[] = {".aux.xml", ".ovr", ".prj", ".tfw", ".hdr", ".xml",
-                                   ".json",    ".ply", ".txt", ".md",  ".msk", ".partial"};
+  static const char* suffixes[] = {".aux.xml", ".ovr", ".prj", ".tfw", ".hdr",     ".xml", ".json",
+                                   ".ply",     ".txt", ".md",  ".msk", ".partial", ".obj", ".stl"};
   for (const char* s : suffixes) {
     const std::string suffix = s;
     if (name.size() >= suffix.size() &&
@@ -177,11 +177,11 @@ int run_batch(const ParOptions& o, const std::string& self, const std::atomic<in
     const auto [it, fresh] = names.emplace(stem, input);
     if (!fresh) {
       throw UsageError(input + " and " + it->second + " would both write " +
-                       (fs::path(o.out_dir) / (stem + ".ply")).string());
+                       (fs::path(o.out_dir) / (stem + io::extension_of(o.format))).string());
     }
     Job job;
     job.input = input;
-    job.output = (fs::path(o.out_dir) / (stem + ".ply")).string();
+    job.output = (fs::path(o.out_dir) / (stem + io::extension_of(o.format))).string();
     job.report = (fs::path(o.out_dir) / (stem + ".json")).string();
     jobs.push_back(job);
   }

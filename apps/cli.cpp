@@ -15,6 +15,7 @@
 #include <iterator>
 
 #include "core/errors.hpp"
+#include "io/atomic_output_file.hpp"
 #include "parallel/meta.hpp"
 
 namespace dpts::cli {
@@ -51,7 +52,7 @@ std::string par_help() {
        dpts-par --batch LIST|DIR --out-dir OUT [--jobs N] [options]
 
 Simplifies a DEM (a band of any raster GDAL reads) into a TIN that preserves surface
-(geodesic) distances, and writes it as PLY. OUTPUT - is standard output; INPUT - is
+(geodesic) distances, and writes it as PLY, OBJ, STL or GeoPackage. OUTPUT - is standard output; INPUT - is
 standard input (GDAL's /vsistdin/).
 
   --algo ALGO          qem (default): dpts's quadric edge collapse (triangle quadrics, a
@@ -92,14 +93,18 @@ standard input (GDAL's /vsistdin/).
   --report FILE.json   write a JSON report of the run (input, options, output with its
                        sha256, per-stage wall and CPU times, peak memory, pieces), also
                        when it fails
-  --ascii              write ASCII PLY (default: binary little-endian)
+  --format F           output format: ply (default), obj (Wavefront), stl (binary; float32
+                       coordinates) or gpkg (GeoPackage: one layer of triangles as Polygon Z
+                       features, with the CRS; opens in QGIS); default: OUTPUT's extension
+                       (.ply .obj .stl .gpkg), else ply
+  --ascii              write ASCII PLY or STL (default: binary little-endian)
   --config KEY VALUE   set a GDAL configuration option
   --quiet              no progress or summary on stderr (warnings still show)
   --help, --version
 
 Batch mode: dpts-par --batch LIST|DIR --out-dir OUT [--jobs N] [options]
   simplifies every raster of folder DIR (or every path listed in file LIST, one per line)
-  into OUT/NAME.ply with OUT/NAME.json reports, and writes OUT/batch-summary.json. A failed
+  into OUT/NAME.ply (or the --format's extension) with OUT/NAME.json reports, and writes OUT/batch-summary.json. A failed
   input is recorded and the batch goes on. Run it again to resume: inputs whose report says
   ok for the same input (size, modification time) and options are skipped. --jobs N runs N
   inputs at once, sharing --threads between them. Exit 0 only when every input is done.
@@ -108,8 +113,8 @@ Every valid cell centre is a vertex; no-data, NaN, infinite and absurd (beyond +
 heights are not, and no face covers a void or leaves the valid data. Heights are the
 band's values with its scale and offset applied; any real cell type is read. Output:
 vertex x y z (double, output CRS), faces counter-clockwise seen from above, the CRS as
-WKT in a header comment. The output file
-appears only when complete. Exit status: 0 ok, 1 failure, 2 bad usage.
+WKT in a header comment (PLY, OBJ) or in the layer (GeoPackage; STL has none). The output
+file appears only when complete. Exit status: 0 ok, 1 failure, 2 bad usage.
 )";
 }
 
@@ -235,6 +240,10 @@ ParOptions parse_par(const std::vector<std::string>& args) {
       o.jobs = parse_number<int>(arg, need(arg), 1, "an integer >= 1");
     } else if (arg == "--ascii") {
       o.ascii = true;
+    } else if (arg == "--format") {
+      const std::string text = need(arg);
+      o.format_flag = io::parse_mesh_format(text);
+      if (!o.format_flag) throw UsageError("--format " + text + ": expected ply, obj, stl or gpkg");
     } else if (arg == "--quiet" || arg == "-q") {
       o.quiet = true;
     } else if (arg == "--config") {
@@ -268,7 +277,11 @@ ParOptions parse_par(const std::vector<std::string>& args) {
       o.keep.percent = 10.0;
     }
   }
+  if (o.ascii && o.format_flag == io::MeshFormat::gpkg) {
+    throw UsageError("--ascii: a GeoPackage has no ASCII form");
+  }
   if (!o.batch.empty() || !o.out_dir.empty()) {
+    o.format = o.format_flag.value_or(io::MeshFormat::ply);
     if (o.batch.empty()) throw UsageError("--out-dir: needs --batch");
     if (o.out_dir.empty()) throw UsageError("--batch: needs --out-dir");
     if (!o.report.empty()) throw UsageError("--report: a batch writes one report per input");
@@ -288,6 +301,13 @@ ParOptions parse_par(const std::vector<std::string>& args) {
   // "-": the standard streams, as other tools take it.
   o.input = positional[0] == "-" ? "/vsistdin/" : positional[0];
   o.output = positional[1] == "-" ? "/dev/stdout" : positional[1];
+  o.format = o.format_flag.value_or(io::mesh_format_of(o.output));
+  if (o.format == io::MeshFormat::gpkg) {
+    if (o.ascii) throw UsageError("--ascii: a GeoPackage has no ASCII form");
+    if (io::AtomicOutputFile::streams_to(o.output)) {
+      throw UsageError(positional[1] + ": a GeoPackage cannot be written to a stream or device");
+    }
+  }
   if (!o.report.empty() && (same_file(o.report, o.input) || same_file(o.report, o.output))) {
     throw UsageError("--report " + o.report + ": is the " +
                      (same_file(o.report, o.input) ? "INPUT" : "OUTPUT") +

@@ -13,6 +13,7 @@
 
 #include "core/elimination.hpp"
 #include "core/errors.hpp"
+#include "io/mesh_formats.hpp"
 #include "parallel/simplify.hpp"
 
 namespace dpts::cli {
@@ -45,6 +46,10 @@ struct ParOptions {
   // (--batch, --out-dir, --jobs), its threads, memory or report.
   std::vector<std::string> child_args;
   bool ascii = false;
+  // --format F, else OUTPUT's extension (PLY for any other name); a batch writes NAME plus the
+  // format's extension
+  std::optional<io::MeshFormat> format_flag;
+  io::MeshFormat format = io::MeshFormat::ply;
   bool quiet = false;
   bool help = false;
   bool version = false;

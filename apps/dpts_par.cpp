@@ -24,6 +24,7 @@
 #include "core/surface_sampling.hpp"
 #include "io/atomic_output_file.hpp"
 #include "io/dem_reader.hpp"
+#include "io/mesh_formats.hpp"
 #include "io/ply.hpp"
 #include "parallel/meta.hpp"
 #include "parallel/qem_engine.hpp"
@@ -127,7 +128,7 @@ void summary(const dpts::cli::ParOptions& o, std::size_t in, std::size_t kept, s
                in, kept, faces, o.algo_text.c_str(), secs, o.output.c_str());
 }
 
-// Writes a mesh (x, y in the output CRS) as PLY, refusing one with folded faces.
+// Writes a mesh (x, y in the output CRS) in the output format, refusing one with folded faces.
 void write_mesh(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem, dpts::io::Mesh mesh,
                 dpts::io::AtomicOutputFile& out) {
   using namespace dpts;
@@ -150,11 +151,24 @@ void write_mesh(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem, dp
                           std::filesystem::path(o.input).filename().string());
   mesh.comments.push_back("crs " + (dem.output_wkt.empty() ? std::string("none") : dem.output_wkt));
   g_report.clock.enter("write");
+  io::MeshWriteOptions wo;
+  wo.format = o.format;
+  wo.ascii = o.ascii;
+  wo.crs_wkt = dem.output_wkt;
+  wo.layer = std::filesystem::path(o.output).stem().string();
+  double moved = 0;
   try {
-    io::write_ply(out.stream(), mesh,
-                  o.ascii ? io::PlyFormat::ascii : io::PlyFormat::binary_little_endian);
+    moved = io::write_mesh(out, mesh, wo);
   } catch (const IoError& e) {
     throw IoError(o.output + ": " + e.what());
+  }
+  // note: binary STL holds float32; at UTM northings (~5e6 m) that is 0.25 m steps.
+  if (moved > 1e-3) {
+    std::fprintf(stderr,
+                 DPTS_PROG
+                 ": warning: %s: binary STL holds float32: coordinates moved by up to "
+                 "%.3g; --ascii keeps them exact\n",
+                 o.output.c_str(), moved);
   }
   if (g_cancel.load(std::memory_order_relaxed)) throw Cancelled();
   out.commit();

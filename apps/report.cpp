@@ -67,7 +67,8 @@ std::string output_options_json(const ParOptions& o) {
       .add("seed", static_cast<unsigned long long>(o.elimination.seed))
       .add("t_srs", o.t_srs)
       .add("band", o.band)
-      .add("ascii", o.ascii);
+      .add("ascii", o.ascii)
+      .add("format", io::extension_of(o.format) + 1);
   io::JsonObject config;
   for (const auto& [k, v] : o.config) config.add(k, v);
   j.raw("config", config.str());

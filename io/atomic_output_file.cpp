@@ -124,15 +124,32 @@ AtomicOutputFile::~AtomicOutputFile() {
   std::filesystem::remove(temp_, ec);
 }
 
-void AtomicOutputFile::commit() {
-  out_.flush();
-  if (!out_) {
-    const int err = errno;
-    throw IoError(final_.string() + ": write failed" +
-                  (err ? std::string(" (") + std::strerror(err) + ")" : std::string(" (disk full?)")));
+std::filesystem::path AtomicOutputFile::release_path() {
+  if (stream_) {
+    throw UsageError(final_.string() + ": a GeoPackage cannot be written to a stream or device");
   }
   out_.close();
-  if (out_.fail()) throw IoError(final_.string() + ": write failed on close");
+  std::error_code ec;
+  std::filesystem::remove(temp_, ec);
+  released_ = true;
+  return temp_;
+}
+
+void AtomicOutputFile::commit() {
+  if (released_ && !std::filesystem::exists(temp_)) {
+    throw IoError(final_.string() + ": write failed (no file was written)");
+  }
+  if (!released_) {
+    out_.flush();
+    if (!out_) {
+      const int err = errno;
+      throw IoError(
+          final_.string() + ": write failed" +
+          (err ? std::string(" (") + std::strerror(err) + ")" : std::string(" (disk full?)")));
+    }
+    out_.close();
+    if (out_.fail()) throw IoError(final_.string() + ": write failed on close");
+  }
   if (stream_) {
     committed_ = true;
     return;

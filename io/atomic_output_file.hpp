@@ -30,6 +30,10 @@ class AtomicOutputFile {
   AtomicOutputFile& operator=(const AtomicOutputFile&) = delete;
 
   std::ostream& stream() { return out_; }
+  // For a writer that creates the file itself (GDAL's GeoPackage): closes the stream, removes
+  // the empty temporary file and returns its path, to be created there before commit(). Throws
+  // UsageError for an output written as a stream (a database cannot be streamed).
+  std::filesystem::path release_path();
   const std::filesystem::path& temp_path() const { return temp_; }
   // Flushes, syncs, checks for write errors, and renames over final_path (replacing it).
   void commit();
@@ -39,7 +43,8 @@ class AtomicOutputFile {
   std::filesystem::path temp_;
   std::ofstream out_;
   bool committed_ = false;
-  bool stream_ = false;  // written into final_ directly
+  bool stream_ = false;    // written into final_ directly
+  bool released_ = false;  // release_path(): another writer creates temp_
 };
 
 }  // namespace dpts::io

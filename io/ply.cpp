@@ -2,8 +2,8 @@
 #include "io/ply.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -13,48 +13,16 @@
 #include <sstream>
 
 #include "core/errors.hpp"
+#include "io/byte_writer.hpp"
 
 namespace dpts::io {
 namespace {
 
-bool host_is_little_endian() {
-  const std::uint16_t probe = 1;
-  unsigned char first = 0;
-  std::memcpy(&first, &probe, 1);
-  return first == 1;
-}
-
-template <typename T>
-void put_le(std::string& buf, T value) {
-  char bytes[sizeof(T)];
-  std::memcpy(bytes, &value, sizeof(T));
-  if (!host_is_little_endian()) std::reverse(bytes, bytes + sizeof(T));
-  buf.append(bytes, sizeof(T));
-}
-
-void put_number(std::string& buf, double v) {
-  char tmp[32];
-  const auto res = std::to_chars(tmp, tmp + sizeof tmp, v);
-  buf.append(tmp, res.ptr);
-}
-
-void put_number(std::string& buf, std::uint32_t v) {
-  char tmp[16];
-  const auto res = std::to_chars(tmp, tmp + sizeof tmp, v);
-  buf.append(tmp, res.ptr);
-}
-
-// "write failed (why)": errno still holds the failed write's reason (EFBIG, ENOSPC, EIO...).
-std::string write_failure() {
-  const int err = errno;
-  return std::string("write failed") + (err ? std::string(" (") + std::strerror(err) + ")" : "");
-}
-
-void flush(std::ostream& out, std::string& buf) {
-  out.write(buf.data(), static_cast<std::streamsize>(buf.size()));
-  if (!out) throw IoError(write_failure());
-  buf.clear();
-}
+using bytes::flush;
+using bytes::host_is_little_endian;
+using bytes::put_le;
+using bytes::put_number;
+using bytes::write_failure;
 
 }  // namespace
 
@@ -71,7 +39,7 @@ void write_ply(std::ostream& out, const Mesh& mesh, PlyFormat format) {
   buf += "property double x\nproperty double y\nproperty double z\n";
   buf += "element face " + std::to_string(mesh.faces.size()) + "\n";
   buf += "property list uchar int vertex_indices\nend_header\n";
-  constexpr std::size_t kChunk = 1 << 20;
+  constexpr std::size_t kChunk = bytes::kChunk;
   for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
     if (format == PlyFormat::ascii) {
       put_number(buf, mesh.xyz[3 * i]);

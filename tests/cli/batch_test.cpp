@@ -147,6 +147,22 @@ TEST_CASE("a batch records the broken input, goes on, and resumes without redoin
   CHECK(test::run(kExe, other).exit_code == 0);
 }
 
+TEST_CASE("a batch with --format writes each output in that format", "[cli][batch][formats]") {
+  test::TempDir dir;
+  make_folder(dir / "in", 30);
+  fs::remove(dir / "in" / "broken.tif");
+  const auto r = test::run(kExe, {"--quiet", "--batch", (dir / "in").string(), "--out-dir",
+                                  (dir / "out").string(), "--format", "gpkg"});
+  CHECK(r.exit_code == 0);
+  for (int k = 0; k < 3; ++k) {
+    const auto out = dir / "out" / ("dem" + std::to_string(k) + ".gpkg");
+    CHECK(test::file_bytes(out).rfind("SQLite format 3", 0) == 0);
+    CHECK(field(field(test::file_bytes(dir / "out" / ("dem" + std::to_string(k) + ".json")),
+                      "output"),
+                "sha256") == io::sha256_file(out.string()));
+  }
+}
+
 TEST_CASE("a batch folder's tables and vector files are not inputs", "[cli][batch]") {
   test::TempDir dir;
   make_folder(dir / "in", 12, 2);

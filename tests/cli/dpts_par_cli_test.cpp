@@ -1,5 +1,6 @@
 // dpts-par as users run it: exit codes, one-line messages, no output left on failure.
 #include <gdal_priv.h>
+#include <ogrsf_frmts.h>
 #include <sys/stat.h>
 
 #include <catch2/catch.hpp>
@@ -89,6 +90,86 @@ TEST_CASE("options ascii, vertices and quiet do what they say", "[cli]") {
   CHECK(line == "format ascii 1.0");
 }
 
+TEST_CASE("OBJ, STL and GeoPackage outputs hold the PLY's mesh, by extension or --format",
+          "[cli][formats]") {
+  GDALAllRegister();
+  Fixture fx;
+  const auto ply = (fx.dir / "out.ply").string();
+  REQUIRE(test::run(kExe, {"--quiet", fx.dem, ply}).exit_code == 0);
+  const io::Mesh mesh = io::read_ply_file(ply);
+  REQUIRE(mesh.faces.size() > 10);
+
+  // OBJ (named .txt: --format decides): the same numbers, shortest round-trip, 1-based faces.
+  const auto obj = (fx.dir / "out.txt").string();
+  REQUIRE(test::run(kExe, {"--quiet", "--format", "obj", fx.dem, obj}).exit_code == 0);
+  std::istringstream text(test::file_bytes(obj));
+  std::vector<double> xyz;
+  std::vector<std::array<std::uint32_t, 3>> faces;
+  for (std::string line; std::getline(text, line);) {
+    std::istringstream ls(line);
+    std::string tag;
+    ls >> tag;
+    if (tag == "v") {
+      double x, y, z;
+      ls >> x >> y >> z;
+      xyz.insert(xyz.end(), {x, y, z});
+    } else if (tag == "f") {
+      std::uint32_t a, b, c;
+      ls >> a >> b >> c;
+      faces.push_back({a - 1, b - 1, c - 1});
+    } else {
+      CHECK(tag == "#");
+    }
+  }
+  CHECK(xyz == mesh.xyz);
+  CHECK(faces == mesh.faces);
+
+  // STL (ASCII: exact numbers): one facet per face. Binary STL warns of float32 at UTM.
+  const auto stl = (fx.dir / "out.stl").string();
+  REQUIRE(test::run(kExe, {"--quiet", "--ascii", fx.dem, stl}).exit_code == 0);
+  const std::string st = test::file_bytes(stl);
+  std::size_t facets = 0;
+  for (auto p = st.find("facet normal"); p != std::string::npos;
+       p = st.find("facet normal", p + 1)) {
+    ++facets;
+  }
+  CHECK(facets == mesh.faces.size());
+  const auto r = test::run(kExe, {"--quiet", fx.dem, (fx.dir / "bin.stl").string()});
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.err.rfind("dpts-par: warning: " + (fx.dir / "bin.stl").string() +
+                        ": binary STL holds float32: coordinates moved by up to ",
+                    0) == 0);
+  CHECK(test::file_bytes(fx.dir / "bin.stl").size() == 84 + 50 * mesh.faces.size());
+
+  // GeoPackage: a Polygon Z per face in the DEM's CRS, the layer named after the file.
+  const auto gpkg = (fx.dir / "out.gpkg").string();
+  REQUIRE(test::run(kExe, {"--quiet", fx.dem, gpkg}).exit_code == 0);
+  auto* ds = static_cast<GDALDataset*>(
+      GDALOpenEx(gpkg.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  REQUIRE(ds != nullptr);
+  OGRLayer* layer = ds->GetLayerByName("out");
+  REQUIRE(layer != nullptr);
+  CHECK(layer->GetFeatureCount() == static_cast<GIntBig>(mesh.faces.size()));
+  REQUIRE(layer->GetSpatialRef() != nullptr);
+  CHECK(std::string(layer->GetSpatialRef()->GetAuthorityCode(nullptr)) == "32611");
+  OGREnvelope3D env;
+  for (auto& feature : *layer) {
+    OGREnvelope3D one;
+    feature->GetGeometryRef()->getEnvelope(&one);
+    env.Merge(one);
+  }
+  double lo = mesh.xyz[2], hi = mesh.xyz[2];
+  for (std::size_t i = 2; i < mesh.xyz.size(); i += 3) {
+    lo = std::min(lo, mesh.xyz[i]);
+    hi = std::max(hi, mesh.xyz[i]);
+  }
+  CHECK(env.MinZ == lo);
+  CHECK(env.MaxZ == hi);
+  GDALClose(ds);
+  CHECK(fx.dir.files() == std::vector<std::string>{"bin.stl", "dem.tif", "out.gpkg", "out.ply",
+                                                   "out.stl", "out.txt"});
+}
+
 TEST_CASE("output bytes are identical for 1, 2 and 4 threads", "[cli][determinism]") {
   Fixture fx;
   const auto algo = GENERATE(as<std::string>{}, "vp", "vp-meta", "pld-meta", "qslim", "qem");
@@ -153,6 +234,11 @@ TEST_CASE("bad usage exits 2 with a one-line message naming the flag, creating n
       {{fx.dem}, "expected INPUT and OUTPUT"},
       {{fx.dem, fx.dem}, fx.dem + ": OUTPUT is the INPUT file"},
       {{"--t-srs", "EPSG:4326", fx.dem, out}, "--t-srs EPSG:4326: expected a projected CRS"},
+      {{"--format", "las", fx.dem, out}, "--format las: expected ply, obj, stl or gpkg"},
+      {{"--ascii", fx.dem, (fx.dir / "out.gpkg").string()},
+       "--ascii: a GeoPackage has no ASCII form"},
+      {{"--format", "gpkg", fx.dem, "-"},
+       "-: a GeoPackage cannot be written to a stream or device"},
   };
   for (const auto& c : cases) {
     INFO(c.args[0]);
