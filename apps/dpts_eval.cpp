@@ -4,6 +4,7 @@
 #include <cpl_error.h>
 #include <gdal_priv.h>
 #include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <atomic>
@@ -27,6 +28,7 @@
 #include "io/atomic_output_file.hpp"
 #include "io/dem_reader.hpp"
 #include "io/json.hpp"
+#include "io/pictures.hpp"
 #include "io/ply.hpp"
 #include "io/sample_points.hpp"
 #include "parallel/evaluate.hpp"
@@ -48,6 +50,8 @@ extern "C" void on_signal(int sig) {
 struct Options {
   std::string dem, mesh, t_srs;
   std::string sample_points, pairs_out;  // --sample-points FILE.csv, --pairs-out FILE.csv
+  std::string error_map, hillshade;      // --error-map, --hillshade-compare FILE.png
+  bool edges = false;                    // --edges: the TIN's edges over its hillshade
   dpts::par::EvalOptions eval;
   double snap_m = -1;  // < 0: default
   int threads = 0;
@@ -86,6 +90,14 @@ cell centre.
                      write set,i,j,gd_T,gd_S,rel_err for every pair i < j of every set (sets
                      from 0; gd inf where not connected, rel_err empty where not measured);
                      the file appears only when the run succeeds
+  --error-map FILE.png
+                     draw the vertical error (mesh minus DEM) at every valid cell: blue below,
+                     red above, saturating near the 99th percentile, with a colour bar, a scale
+                     bar, the RMSE and the maximum (at most 1000 pixels a side: each pixel
+                     shows its block's largest error)
+  --hillshade-compare FILE.png
+                     draw the hillshades of the DEM and of the mesh side by side
+  --edges            with --hillshade-compare: draw the mesh's edges over its hillshade
   --exact            exact geodesics (CGAL's Surface_mesh_shortest_path, Xin-Wang) instead of
                      the Steiner graph: a reference for small DEMs only, each source costing
                      about 0.75 s and 250 MB on a 100 x 100 grid, one per thread at once (not
@@ -155,6 +167,12 @@ Options parse(const std::vector<std::string>& args) {
       o.sample_points = value();
     } else if (a == "--pairs-out") {
       o.pairs_out = value();
+    } else if (a == "--error-map") {
+      o.error_map = value();
+    } else if (a == "--hillshade-compare") {
+      o.hillshade = value();
+    } else if (a == "--edges") {
+      o.edges = true;
     } else if (a == "--exact") {
       o.eval.exact = true;
     } else if (a == "--steiner") {
@@ -183,12 +201,22 @@ Options parse(const std::vector<std::string>& args) {
   refuse("--exact", "--delta", "exact geodesics have no Steiner spacing");
   refuse("--exact", "--steiner", "one kind of geodesics at a time");
   refuse("--exact", "--max-memory", "the memory of exact geodesics is not bounded");
-  if (!o.pairs_out.empty()) {
+  if (o.edges && o.hillshade.empty()) throw UsageError("--edges: needs --hillshade-compare");
+  const std::pair<const char*, const std::string*> outputs[] = {
+      {"--pairs-out", &o.pairs_out},
+      {"--error-map", &o.error_map},
+      {"--hillshade-compare", &o.hillshade}};
+  for (const auto& [flag, path] : outputs) {
+    if (path->empty()) continue;
     for (const std::string* input : {&o.dem, &o.mesh, &o.sample_points}) {
-      if (!input->empty() && dpts::cli::same_file(o.pairs_out, *input)) {
-        throw UsageError("--pairs-out " + o.pairs_out + ": is an input of the run");
+      if (!input->empty() && dpts::cli::same_file(*path, *input)) {
+        throw UsageError(std::string(flag) + " " + *path + ": is an input of the run");
       }
     }
+  }
+  if (!o.error_map.empty() && !o.hillshade.empty() &&
+      dpts::cli::same_file(o.error_map, o.hillshade)) {
+    throw UsageError("--error-map and --hillshade-compare: the same file");
   }
   return o;
 }
@@ -241,6 +269,75 @@ class PairsOutput {
   std::ofstream device_;
 };
 
+// The unique edges of a mesh's faces, each as grid positions c0, r0, c1, r1.
+std::vector<std::array<double, 4>> grid_edges(
+    const std::vector<double>& grid_xy, const std::vector<std::array<std::uint32_t, 3>>& faces) {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+  pairs.reserve(3 * faces.size());
+  for (const auto& f : faces) {
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = f[static_cast<std::size_t>(k)],
+                          b = f[static_cast<std::size_t>((k + 1) % 3)];
+      pairs.emplace_back(std::min(a, b), std::max(a, b));
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  std::vector<std::array<double, 4>> edges;
+  edges.reserve(pairs.size());
+  for (const auto& [a, b] : pairs) {
+    edges.push_back({grid_xy[2 * a], grid_xy[2 * a + 1], grid_xy[2 * b], grid_xy[2 * b + 1]});
+  }
+  return edges;
+}
+
+struct Pictures {
+  std::string error_map, hillshade;  // PNG bytes (empty: not asked for)
+};
+
+// The mesh's height at every valid cell centre of the DEM (located as the vertical error is),
+// then the pictures asked for.
+Pictures draw_pictures(const dpts::io::Dem& dem, const dpts::core::PointLocator& locate,
+                       double snap, bool error_map, bool hillshade, std::size_t mesh_vertices,
+                       const std::vector<std::array<double, 4>>& edges) {
+  using namespace dpts;
+  const auto& g = dem.grid;
+  std::vector<std::uint32_t> cells;
+  for (std::size_t i = 0; i < g.z.size(); ++i) {
+    if (!std::isnan(g.z[i])) cells.push_back(static_cast<std::uint32_t>(i));
+  }
+  const std::vector<double> xy = dem.output_xy(cells);
+  const float none = std::numeric_limits<float>::quiet_NaN();
+  io::CellRaster heights, mesh;
+  heights.width = mesh.width = g.width;
+  heights.height = mesh.height = g.height;
+  const auto& m = dem.frame.m;
+  heights.cell_x_m = mesh.cell_x_m = std::hypot(m[0][0], m[1][0]) * dem.frame.metres_per_unit;
+  heights.cell_y_m = mesh.cell_y_m = std::hypot(m[0][1], m[1][1]) * dem.frame.metres_per_unit;
+  heights.values.assign(g.z.size(), none);
+  mesh.values.assign(g.z.size(), none);
+  tbb::parallel_for(std::size_t{0}, cells.size(), [&](std::size_t i) {
+    const std::uint32_t c = cells[i];
+    heights.values[c] = static_cast<float>(g.z[c]);
+    if (const auto hit = locate.locate(xy[2 * i], xy[2 * i + 1], snap)) {
+      mesh.values[c] = static_cast<float>(hit->point.z);
+    }
+  });
+  Pictures p;
+  if (hillshade) {
+    p.hillshade = io::hillshade_compare_png(
+        heights, mesh, "TIN (" + std::to_string(mesh_vertices) + " VERTICES)", edges);
+  }
+  if (error_map) {
+    io::CellRaster error = mesh;
+    for (std::size_t i = 0; i < error.values.size(); ++i) {
+      error.values[i] = mesh.values[i] - heights.values[i];  // NaN where either is none
+    }
+    p.error_map = io::error_map_png(error);
+  }
+  return p;
+}
+
 int run(const Options& o) {
   using namespace dpts;
   if (o.help) {
@@ -273,12 +370,22 @@ int run(const Options& o) {
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
                                   static_cast<std::size_t>(threads));
   const io::Dem dem = io::read_dem(o.dem, io::DemReadOptions{o.t_srs}, nullptr);
-  // Nor may --pairs-out overwrite any file of the DEM's dataset (an ENVI .hdr, a VRT's
-  // source, the zip behind /vsizip/).
-  if (const std::string* f =
-          o.pairs_out.empty() ? nullptr : dpts::cli::same_file_in(o.pairs_out, dem.files)) {
-    throw UsageError("--pairs-out " + o.pairs_out + ": is " + *f + ", a file of the DEM");
+  // Nor may an output overwrite any file of the DEM's dataset (an ENVI .hdr, a VRT's source,
+  // the zip behind /vsizip/).
+  for (const auto& [flag, path] :
+       {std::pair<const char*, const std::string*>{"--pairs-out", &o.pairs_out},
+        {"--error-map", &o.error_map},
+        {"--hillshade-compare", &o.hillshade}}) {
+    if (const std::string* f =
+            path->empty() ? nullptr : dpts::cli::same_file_in(*path, dem.files)) {
+      throw UsageError(std::string(flag) + " " + *path + ": is " + *f + ", a file of the DEM");
+    }
   }
+  // The pictures' files are claimed now (a folder that does not exist fails before any work);
+  // they appear only when the run succeeds.
+  std::optional<io::AtomicOutputFile> error_map_out, hillshade_out;
+  if (!o.error_map.empty()) error_map_out.emplace(o.error_map);
+  if (!o.hillshade.empty()) hillshade_out.emplace(o.hillshade);
 
   // T: the DEM's full-resolution grid TIN, in the output CRS dpts-par uses.
   const core::TriMesh t = dem.grid_mesh();
@@ -348,6 +455,17 @@ int run(const Options& o) {
     sq += dz * dz;
     vmax = std::max(vmax, std::fabs(dz));
     ++measured;
+  }
+
+  // The pictures, drawn now (their rasters freed before the geodesics) and written at the end.
+  std::string error_map_png, hillshade_png;
+  if (error_map_out || hillshade_out) {
+    std::vector<std::array<double, 4>> edges;
+    if (o.edges) edges = grid_edges(dem.grid_xy(s_xy), s.faces);
+    const Pictures p = draw_pictures(dem, locate_s, snap, error_map_out.has_value(),
+                                     hillshade_out.has_value(), s.vertex_count(), edges);
+    error_map_png = p.error_map;
+    hillshade_png = p.hillshade;
   }
 
   eo.snap_m = snap;
@@ -531,6 +649,13 @@ int run(const Options& o) {
   // note: stdout first: a run whose report cannot be written fails, and leaves no pairs file.
   check_stdout();
   if (pairs_out) pairs_out->commit();
+  auto put = [](std::optional<io::AtomicOutputFile>& out, const std::string& png) {
+    if (!out) return;
+    out->stream().write(png.data(), static_cast<std::streamsize>(png.size()));
+    out->commit();
+  };
+  put(error_map_out, error_map_png);
+  put(hillshade_out, hillshade_png);
   return 0;
 }
 

@@ -1,7 +1,8 @@
 // dpts-eval as users run it: figures, JSON, exit codes.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
-#include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <string>
@@ -264,6 +265,42 @@ TEST_CASE("dpts-eval refuses --sample-points with --points or --sets, and output
       test::run(kEval, {"--dem", fx.dem, "--mesh", "m.ply", "--sample-points", pts, "--pairs-out", pts});
   CHECK(over.exit_code == 2);
   CHECK(over.err.rfind("dpts-eval: --pairs-out " + pts + ": is an input of the run\n", 0) == 0);
+}
+
+TEST_CASE("dpts-eval draws the error map and the hillshades, only when the run succeeds",
+          "[cli][eval][pictures]") {
+  Fixture fx;
+  const auto mesh = simplified_mesh(fx);
+  const auto map = (fx.dir / "error.png").string(), shade = (fx.dir / "shade.png").string();
+  const auto r =
+      test::run(kEval, {"--quiet", "--dem", fx.dem, "--mesh", mesh, "--points", "4", "--sets", "1",
+                        "--error-map", map, "--hillshade-compare", shade, "--edges"});
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK(test::file_bytes(map).rfind("\x89PNG\r\n\x1a\n", 0) == 0);
+  CHECK(test::file_bytes(shade).rfind("\x89PNG\r\n\x1a\n", 0) == 0);
+
+  // A run that fails (a point outside the mesh) leaves neither; nor does bad usage.
+  std::filesystem::remove(map);
+  std::filesystem::remove(shade);
+  const auto pts = (fx.dir / "far.csv").string();
+  std::ofstream(pts) << "set,x,y\n0,400020,3799980\n0,500000,3700000\n";
+  const auto failed =
+      test::run(kEval, {"--quiet", "--dem", fx.dem, "--mesh", mesh, "--sample-points", pts,
+                        "--error-map", map, "--hillshade-compare", shade});
+  CHECK(failed.exit_code == 1);
+  CHECK_FALSE(std::filesystem::exists(map));
+  CHECK_FALSE(std::filesystem::exists(shade));
+  const auto edges = test::run(kEval, {"--dem", fx.dem, "--mesh", mesh, "--edges"});
+  CHECK(edges.exit_code == 2);
+  CHECK(edges.err.rfind("dpts-eval: --edges: needs --hillshade-compare\n", 0) == 0);
+  const auto over = test::run(kEval, {"--dem", fx.dem, "--mesh", mesh, "--error-map", mesh});
+  CHECK(over.exit_code == 2);
+  CHECK(over.err.rfind("dpts-eval: --error-map " + mesh + ": is an input of the run\n", 0) == 0);
+  const auto nowhere = test::run(
+      kEval, {"--dem", fx.dem, "--mesh", mesh, "--hillshade-compare", "/nonexistent/s.png"});
+  CHECK(nowhere.exit_code == 1);
+  CHECK(nowhere.err.find("/nonexistent/s.png") != std::string::npos);
 }
 
 TEST_CASE("dpts-eval refuses --points whose pair tables cannot fit, before any work",
