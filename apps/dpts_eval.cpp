@@ -20,6 +20,7 @@
 #include <iostream>
 #include <optional>
 
+#include "api/evaluation.hpp"
 #include "apps/cli.hpp"
 #include "core/errors.hpp"
 #include "core/footprint.hpp"
@@ -350,137 +351,50 @@ int run(const Options& o) {
     check_stdout();
     return 0;
   }
-  // Each set's pairs live in K x K tables (distances one way and the other, on T and on T',
-  // the meeting search's, which are wanted: about 64 bytes a pair in all, measured from
-  // parallel/evaluate.cpp's arrays): refused up front where they cannot fit, not killed by
-  // the kernel or failing as a bare out-of-memory later.
-  if (o.sample_points.empty()) {
-    const double k = o.eval.points;
-    const double need = k * k * 64;
-    const double have = static_cast<double>(par::available_memory_bytes());
-    if (need > have) {
-      throw std::runtime_error(
-          "--points " + std::to_string(o.eval.points) + ": the " + std::to_string(o.eval.points) +
-          " x " + std::to_string(o.eval.points) + " pairs of a set need about " +
-          par::format_bytes(need) + ", more than the " + par::format_bytes(have) + " available");
-    }
-  }
   const auto start = std::chrono::steady_clock::now();
   const int threads = dpts::cli::thread_count(o.threads);
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
                                   static_cast<std::size_t>(threads));
-  const io::Dem dem = io::read_dem(o.dem, io::DemReadOptions{o.t_srs}, nullptr);
-  // Nor may an output overwrite any file of the DEM's dataset (an ENVI .hdr, a VRT's source,
-  // the zip behind /vsizip/).
-  for (const auto& [flag, path] :
-       {std::pair<const char*, const std::string*>{"--pairs-out", &o.pairs_out},
-        {"--error-map", &o.error_map},
-        {"--hillshade-compare", &o.hillshade}}) {
-    if (const std::string* f =
-            path->empty() ? nullptr : dpts::cli::same_file_in(*path, dem.files)) {
-      throw UsageError(std::string(flag) + " " + *path + ": is " + *f + ", a file of the DEM");
-    }
-  }
-  // The pictures' files are claimed now (a folder that does not exist fails before any work);
-  // they appear only when the run succeeds.
+  api::EvalRequest request;
+  request.dem = o.dem;
+  request.mesh = o.mesh;
+  request.t_srs = o.t_srs;
+  request.sample_points = o.sample_points;
+  request.eval = o.eval;
+  request.snap_m = o.snap_m;
+  request.max_memory_mb = o.max_memory_mb;
   std::optional<io::AtomicOutputFile> error_map_out, hillshade_out;
-  if (!o.error_map.empty()) error_map_out.emplace(o.error_map);
-  if (!o.hillshade.empty()) hillshade_out.emplace(o.hillshade);
-
-  // T: the DEM's full-resolution grid TIN, in the output CRS dpts-par uses.
-  const core::TriMesh t = dem.grid_mesh();
-  // T': the mesh.
-  io::Mesh ply = io::read_ply_file(o.mesh);
-  io::check_triangles(ply, o.mesh);
-  // A mesh of this DEM lies on its footprint; one far outside it is another DEM's, or in
-  // another CRS (and its Steiner graph could be unboundedly large).
-  {
-    double lo[2] = {t.xyz[0], t.xyz[1]}, hi[2] = {t.xyz[0], t.xyz[1]};
-    for (std::size_t v = 0; v < t.vertex_count(); ++v) {
-      for (int k = 0; k < 2; ++k) {
-        lo[k] = std::min(lo[k], t.xyz[3 * v + k]);
-        hi[k] = std::max(hi[k], t.xyz[3 * v + k]);
+  const std::unique_ptr<api::Evaluation> ev = api::load(request, [&](const io::Dem& dem) {
+    // Nor may an output overwrite any file of the DEM's dataset (an ENVI .hdr, a VRT's
+    // source, the zip behind /vsizip/).
+    for (const auto& [flag, path] :
+         {std::pair<const char*, const std::string*>{"--pairs-out", &o.pairs_out},
+          {"--error-map", &o.error_map},
+          {"--hillshade-compare", &o.hillshade}}) {
+      if (const std::string* f =
+              path->empty() ? nullptr : dpts::cli::same_file_in(*path, dem.files)) {
+        throw UsageError(std::string(flag) + " " + *path + ": is " + *f + ", a file of the DEM");
       }
     }
-    const double margin = 0.01 * std::hypot(hi[0] - lo[0], hi[1] - lo[1]);
-    for (std::size_t v = 0; v < ply.vertex_count(); ++v) {
-      const double x = ply.xyz[3 * v], y = ply.xyz[3 * v + 1];
-      if (x < lo[0] - margin || x > hi[0] + margin || y < lo[1] - margin || y > hi[1] + margin) {
-        throw InputError(o.mesh + ": vertex " + std::to_string(v) + " (" + std::to_string(x) +
-                         ", " + std::to_string(y) + ") lies outside " + o.dem +
-                         "; is the mesh of another DEM or in another CRS?");
-      }
-    }
-  }
-  core::TriMesh s{std::move(ply.xyz), std::move(ply.faces)};
-  // A triangle soup (an STL made PLY) shares no vertex between faces: weld it, so that the
-  // Steiner graph sees its shared edges. A face whose corners fall together is refused.
-  const std::size_t merged = core::weld_identical_vertices(s);
-  for (std::size_t f = 0; merged > 0 && f < s.faces.size(); ++f) {
-    const auto& v = s.faces[f];
-    if (v[0] == v[1] || v[1] == v[2] || v[2] == v[0]) {
-      throw InputError(o.mesh + ": face " + std::to_string(f) +
-                       " has two corners at the same position");
-    }
-  }
-  // The sample points given, checked before any heavy work.
-  par::EvalOptions eo = o.eval;
-  if (!o.sample_points.empty()) {
-    eo.sample_xy = io::read_sample_points_file(o.sample_points);
-    eo.sets = static_cast<int>(eo.sample_xy.size());
-    eo.points = static_cast<int>(eo.sample_xy[0].size());
-  }
-
-  // Validity of T' over the DEM.
-  const std::vector<double> s_xy = core::xy_of(s.xyz);
-  const core::MeshCheck mc = core::check_mesh(s_xy, s.faces);
-  const double footprint_area = core::mesh_area(core::xy_of(t.xyz), t.faces);
-  const double tol = dem.to_output ? 0.01 : 1e-6;  // cells; reprojection rounding
-  const std::size_t over_nodata =
-      core::faces_over_nodata(dem.grid, dem.grid_xy(s_xy), s.faces, tol);
-
-  // Vertical error at every cell centre of T's footprint.
-  const core::PointLocator locate_s(s);
-  const double snap =
-      o.snap_m >= 0 ? o.snap_m : (dem.to_output ? 0.5 * dem.frame.metres_per_unit : 0.0);
-  double sq = 0, vmax = 0;
-  std::size_t measured = 0, uncovered = 0;
-  for (std::size_t v = 0; v < t.vertex_count(); ++v) {
-    const auto hit = locate_s.locate(t.xyz[3 * v], t.xyz[3 * v + 1], snap);
-    if (!hit) {
-      ++uncovered;
-      continue;
-    }
-    const double dz = hit->point.z - t.xyz[3 * v + 2];
-    sq += dz * dz;
-    vmax = std::max(vmax, std::fabs(dz));
-    ++measured;
-  }
-
+    // The pictures' files are claimed now (a folder that does not exist fails before any
+    // work); they appear only when the run succeeds.
+    if (!o.error_map.empty()) error_map_out.emplace(o.error_map);
+    if (!o.hillshade.empty()) hillshade_out.emplace(o.hillshade);
+  });
+  const io::Dem& dem = ev->dem;
+  const core::TriMesh& t = ev->t;
+  const core::TriMesh& s = ev->s;
   // The pictures, drawn now (their rasters freed before the geodesics) and written at the end.
   std::string error_map_png, hillshade_png;
   if (error_map_out || hillshade_out) {
     std::vector<std::array<double, 4>> edges;
-    if (o.edges) edges = grid_edges(dem.grid_xy(s_xy), s.faces);
-    const Pictures p = draw_pictures(dem, locate_s, snap, error_map_out.has_value(),
+    if (o.edges) edges = grid_edges(dem.grid_xy(core::xy_of(s.xyz)), s.faces);
+    const Pictures p = draw_pictures(dem, *ev->locate_s, ev->snap, error_map_out.has_value(),
                                      hillshade_out.has_value(), s.vertex_count(), edges);
     error_map_png = p.error_map;
     hillshade_png = p.hillshade;
   }
 
-  eo.snap_m = snap;
-  // What the geodesics may use: the limit less what the run holds already, or what is free.
-  if (o.max_memory_mb > 0) {
-    const std::size_t limit = o.max_memory_mb << 20, held = par::rss_kb() << 10;
-    if (limit <= held) {
-      throw InputError("--max-memory " + std::to_string(o.max_memory_mb) + ": the run holds " +
-                       par::format_bytes(static_cast<double>(held)) +
-                       " (DEM and meshes) before its geodesics start");
-    }
-    eo.memory_budget_bytes = limit - held;
-  } else {
-    eo.memory_budget_bytes = par::available_memory_bytes();
-  }
   // Progress on stderr once the run has lasted a second (not with --quiet): a line as each
   // stage starts, and within a long geodesic stage one per tenth of its sources searched, at
   // most every kProgressEvery seconds.
@@ -517,17 +431,13 @@ int run(const Options& o) {
     sigaction(SIGINT, &sa, nullptr);
     sigaction(SIGTERM, &sa, nullptr);
     pairs_out.emplace(o.pairs_out);
-    eo.keep_pairs = true;
+    ev->options.keep_pairs = true;
   }
-  par::EvalResult r;
-  try {
-    r = par::evaluate_distances(t, s, eo, progress);
-  } catch (const std::invalid_argument& e) {  // the mesh's structure (see SteinerGraph)
-    throw InputError(o.mesh + ": " + e.what());
-  }
+  api::measure(*ev, request, progress);
+  const par::EvalResult& r = ev->result;
+  const par::EvalOptions& eo = ev->options;
   const double secs =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const double rmse = measured ? std::sqrt(sq / measured) : 0.0;
   if (pairs_out) {
     std::vector<io::PairRecord> records;
     records.reserve(r.pairs.size());
@@ -541,18 +451,19 @@ int run(const Options& o) {
                 t.vertex_count(), t.faces.size());
     std::printf("mesh             %s: %zu vertices, %zu faces\n", o.mesh.c_str(), s.vertex_count(),
                 s.faces.size());
-    if (merged > 0) {
+    if (ev->merged > 0) {
       std::printf(
           "welded           %zu vertices at the position of an earlier one merged into it\n",
-          merged);
+          ev->merged);
     }
     std::printf(
         "validity         %zu faces not counter-clockwise, %zu bad edges, %zu faces over no-data\n",
-        mc.clockwise_or_flat, mc.bad_edges, over_nodata);
-    std::printf("coverage         mesh area / footprint area = %.9f\n", mc.area / footprint_area);
+        ev->validity.clockwise_or_flat, ev->validity.bad_edges, ev->over_nodata);
+    std::printf("coverage         mesh area / footprint area = %.9f\n",
+                ev->validity.area / ev->footprint_area);
     std::printf(
         "vertical error   RMSE %.4f m, max %.4f m over %zu cell centres (%zu outside the mesh)\n",
-        rmse, vmax, measured, uncovered);
+        ev->rmse, ev->vmax, ev->measured, ev->uncovered);
     if (r.exact) {
       std::printf("geodesics        exact (CGAL Surface_mesh_shortest_path): T %.2f s, T' %.2f s\n",
                   r.original_s, r.simplified_s);
@@ -595,57 +506,7 @@ int run(const Options& o) {
                 given ? (" from " + o.sample_points).c_str() : "", r.snapped);
     std::printf("time             %.2f s\n", secs);
   }
-  if (o.json) {
-    io::JsonArray sets;
-    for (double e : r.set_errors) sets.raw(io::json_number(e));
-    std::cout << io::JsonObject()
-                     .add("distance_error", r.distance_error)
-                     .raw("distance_error_sets", sets.str())
-                     .add("vertical_rmse", rmse)
-                     .add("vertical_max", vmax)
-                     .add("mesh_vertices", s.vertex_count())
-                     .add("mesh_faces", s.faces.size())
-                     .add("dem_vertices", t.vertex_count())
-                     .add("dem_faces", t.faces.size())
-                     .add("points", eo.points)
-                     .add("sets", eo.sets)
-                     .add("seed", static_cast<unsigned long long>(eo.seed))
-                     .add("sample_points", o.sample_points)
-                     .add("geodesics", r.exact         ? "exact"
-                                       : eo.straighten ? "straightened"
-                                                       : "steiner")
-                     .add("straightened_paths", r.straightened)
-                     .add("straighten_failed", r.straighten_failed)
-                     .add("pairs_measured", r.pairs_measured)
-                     .add("pairs_unconnected_dem", r.pairs_unconnected)
-                     .add("pairs_coincident", r.pairs_coincident)
-                     .add("merged_vertices", merged)
-                     .add("delta_m", r.delta_m)
-                     .add("delta_mesh_m", r.delta_mesh_m)
-                     .add("steiner_nodes_dem", r.original_nodes)
-                     .add("steiner_nodes_mesh", r.simplified_nodes)
-                     .add("searched_share_dem", r.original_searched)
-                     .add("searched_share_mesh", r.simplified_searched)
-                     .add("one_way_pairs_dem", r.original_one_way)
-                     .add("one_way_pairs_mesh", r.simplified_one_way)
-                     .add("snapped_points", r.snapped)
-                     .add("memory_graphs_bytes", r.graphs_bytes)
-                     .add("memory_search_bytes", r.search_bytes)
-                     .add("max_searches", r.max_searches)
-                     .add("faces_not_ccw", mc.clockwise_or_flat)
-                     .add("bad_edges", mc.bad_edges)
-                     .add("faces_over_nodata", over_nodata)
-                     .add("coverage", mc.area / footprint_area)
-                     .add("cells_outside_mesh", uncovered)
-                     .add("threads", threads)
-                     .add("dem", o.dem)
-                     .add("mesh", o.mesh)
-                     .add("seconds_geodesics_dem", r.original_s)
-                     .add("seconds_geodesics_mesh", r.simplified_s)
-                     .add("seconds", secs)
-                     .str()
-              << "\n";
-  }
+  if (o.json) std::cout << ev->json(request, threads, secs) << "\n";
   // note: stdout first: a run whose report cannot be written fails, and leaves no pairs file.
   check_stdout();
   if (pairs_out) pairs_out->commit();

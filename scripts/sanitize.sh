@@ -14,7 +14,10 @@ root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 mode=${1:-asan}
 jobs=${JOBS:-2}
 # note: no dpts-mpi: Open MPI is not instrumented (its own leaks and races would be reported).
-common=(-G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDPTS_BUILD_BENCH=OFF -DDPTS_BUILD_MPI=OFF)
+# Nor the Python module or the installed-package test: an instrumented library cannot be
+# loaded into an uninstrumented python3 or consumer (the sanitizer runtime must come first).
+common=(-G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DDPTS_BUILD_BENCH=OFF -DDPTS_BUILD_MPI=OFF
+        -DDPTS_BUILD_PYTHON=OFF -DDPTS_TEST_PACKAGE=OFF)
 
 run_asan() {
   cmake -S "$root" -B "$root/build-asan" "${common[@]}" \

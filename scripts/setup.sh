@@ -6,7 +6,8 @@ root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
 packages=(build-essential cmake ninja-build libcgal-dev libboost-dev libgmp-dev libmpfr-dev
           libeigen3-dev libtbb-dev libgdal-dev gdal-bin catch2 libbenchmark-dev time python3 bc
-          gnuplot-nox openmpi-bin libopenmpi-dev)  # gnuplot: bench/scaling_sizes.sh; MPI: dpts-mpi
+          gnuplot-nox openmpi-bin libopenmpi-dev  # gnuplot: bench/scaling_sizes.sh; MPI: dpts-mpi
+          python3-dev python3-pybind11 python3-numpy python3-pytest)  # the Python module
 sudo=""
 [[ $(id -u) -eq 0 ]] || sudo="sudo"
 missing=()
