@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <optional>
 
 #include "api/evaluation.hpp"
 #include "core/errors.hpp"
@@ -21,6 +22,7 @@
 #include "io/atomic_output_file.hpp"
 #include "io/dem_reader.hpp"
 #include "io/mesh_formats.hpp"
+#include "parallel/memory.hpp"
 #include "parallel/meta.hpp"
 #include "parallel/qem_engine.hpp"
 
@@ -79,12 +81,19 @@ Mesh simplify_dem(const io::DemInfo& dem, const std::string& name, const Simplif
   if (o.levels < 0 || o.levels > 16) throw UsageError("levels: expected 0 to 16");
   if (o.tile_mb < 1) throw UsageError("tile_mb: expected >= 1");
   if (o.max_error < 0) throw UsageError("max_error: expected >= 0");
-  if (o.max_error > 0 && o.algo != "qem") throw UsageError("max_error: only with algo qem");
+  const std::optional<par::Algorithm> algo = par::parse_algorithm(o.algo);
+  if (!algo || !(*algo == par::Algorithm::qem || par::is_meta(*algo))) {
+    throw UsageError("algo " + o.algo +
+                     ": expected qem, vp-meta or pld-meta (vp, pld and qslim run in dpts-par)");
+  }
+  if (o.max_error > 0 && *algo != par::Algorithm::qem) {
+    throw UsageError("max_error: only with algo qem");
+  }
   SerialProgress serial(progress);
   const core::Progress report = [&](double f, std::string_view stage) { return serial(f, stage); };
   const io::GdalRaster source(dem);
   Mesh out;
-  if (o.algo == "qem") {
+  if (*algo == par::Algorithm::qem) {
     par::QemEngineOptions qo;
     qo.keep = keep;
     qo.levels = o.levels;
@@ -96,10 +105,10 @@ Mesh simplify_dem(const io::DemInfo& dem, const std::string& name, const Simplif
     out.xyz = std::move(result.xyz);
     out.faces = std::move(result.faces);
     out.input_vertices = stats.input_vertices;
-  } else if (o.algo == "vp-meta" || o.algo == "pld-meta") {
+  } else {
     io::check_whole_size(dem, "algo " + o.algo + " (32-bit cell ids); qem reads it in tiles");
     par::MetaOptions mo;
-    mo.elimination.importance = o.algo == "vp-meta" ? core::Importance::vp : core::Importance::pld;
+    mo.elimination.importance = par::importance_of(*algo);
     mo.elimination.seed = o.seed;
     mo.keep = keep;
     mo.levels = o.levels;
@@ -119,9 +128,6 @@ Mesh simplify_dem(const io::DemInfo& dem, const std::string& name, const Simplif
     }
     out.faces = std::move(result.tin.faces);
     out.input_vertices = stats.input_vertices;
-  } else {
-    throw UsageError("algo " + o.algo +
-                     ": expected qem, vp-meta or pld-meta (vp, pld and qslim run in dpts-par)");
   }
   // note: as dpts-par, a mesh that would fold over in the output CRS is refused, not returned.
   const core::MeshCheck check = core::check_mesh(core::xy_of(out.xyz), out.faces);

@@ -9,7 +9,7 @@
 #include "io/json.hpp"
 #include "io/ply.hpp"
 #include "io/sample_points.hpp"
-#include "parallel/meta.hpp"
+#include "parallel/memory.hpp"
 
 namespace dpts::api {
 

@@ -16,7 +16,7 @@
 
 #include "core/errors.hpp"
 #include "io/atomic_output_file.hpp"
-#include "parallel/meta.hpp"
+#include "parallel/memory.hpp"
 
 namespace dpts::cli {
 
@@ -155,16 +155,12 @@ ParOptions parse_par(const std::vector<std::string>& args) {
       o.version = true;
     } else if (arg == "--algo") {
       const std::string v = need(arg);
-      o.meta = v == "vp-meta" || v == "pld-meta";
-      o.qslim = v == "qslim";
-      o.qem = v == "qem";
-      if (v == "vp" || v == "vp-meta" || v == "qslim" || v == "qem") {
-        o.elimination.importance = core::Importance::vp;
-      } else if (v == "pld" || v == "pld-meta") {
-        o.elimination.importance = core::Importance::pld;
-      } else {
+      const auto algo = par::parse_algorithm(v);
+      if (!algo) {
         throw UsageError("--algo " + v + ": expected vp, pld, vp-meta, pld-meta, qslim or qem");
       }
+      o.algo = *algo;
+      o.elimination.importance = par::importance_of(o.algo);
       o.algo_text = v;
     } else if (arg == "--levels") {
       o.levels = parse_number<int>(arg, need(arg), 0, "an integer from 0 to 16");
@@ -265,7 +261,7 @@ ParOptions parse_par(const std::vector<std::string>& args) {
   }
   if (o.help || o.version) return o;
   if (keep_seen && vertices_seen) throw UsageError("--keep and --vertices: give one, not both");
-  if (o.max_error && !o.qem) {
+  if (o.max_error && o.algo != par::Algorithm::qem) {
     throw UsageError("--max-error: only with --algo qem");
   }
   if (!keep_seen && !vertices_seen) {

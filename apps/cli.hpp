@@ -23,12 +23,8 @@ struct ParOptions {
   core::EliminationOptions elimination;
   par::KeepTarget keep;
   std::string keep_text = "10%";
-  std::string algo_text = "qem";
-  bool meta = false;   // --algo vp-meta | pld-meta: the piece engine (PLD'/VP')
-  bool qslim = false;  // --algo qslim: the paper's competitor, whole DEM in memory
-  // --algo qem (the default): dpts's quadric collapse in its piece engine
-  // (parallel/qem_engine.hpp)
-  bool qem = true;
+  par::Algorithm algo = par::Algorithm::qem;  // --algo
+  std::string algo_text = "qem";              // its name
   std::optional<double> max_error;  // --max-error M: vertical error bound (output CRS units)
   std::string max_error_text;       // M as given
   int levels = 4;

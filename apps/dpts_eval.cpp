@@ -33,7 +33,7 @@
 #include "io/ply.hpp"
 #include "io/sample_points.hpp"
 #include "parallel/evaluate.hpp"
-#include "parallel/meta.hpp"
+#include "parallel/memory.hpp"
 
 namespace {
 

@@ -10,7 +10,7 @@
 
 #include "io/atomic_output_file.hpp"
 #include "io/sha256.hpp"
-#include "parallel/meta.hpp"
+#include "parallel/memory.hpp"
 
 namespace dpts::cli {
 
@@ -60,8 +60,9 @@ std::string output_options_json(const ParOptions& o) {
   io::JsonObject j;
   j.add("algo", o.algo_text).add("keep", o.keep_text);
   if (o.max_error) j.add("max_error", *o.max_error);
-  if (o.meta) j.add("levels", o.levels).add("tile_mb", o.tile_mb).add("value_points", o.value_points);
-  if (o.qem) j.add("levels", o.levels).add("tile_mb", o.tile_mb);
+  if (par::is_meta(o.algo))
+    j.add("levels", o.levels).add("tile_mb", o.tile_mb).add("value_points", o.value_points);
+  if (o.algo == par::Algorithm::qem) j.add("levels", o.levels).add("tile_mb", o.tile_mb);
   j.add("vp_volume", o.elimination.vp_volume == core::VolumeMethod::exact ? "exact" : "mc")
       .add("vp_samples", o.elimination.vp_samples)
       .add("seed", static_cast<unsigned long long>(o.elimination.seed))

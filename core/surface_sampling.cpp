@@ -236,4 +236,20 @@ std::optional<PointLocator::Hit> PointLocator::locate(double x, double y, double
   return Hit{lift(mesh_, *nearest, snapped[0], snapped[1]), true};
 }
 
+TriMesh frame_grid_mesh(const HeightGrid& grid, const GridFrame& frame) {
+  const GridTin tin = grid_tin(grid, delaunay_diagonal(frame));
+  TriMesh mesh;
+  if (tin.faces.empty()) return mesh;
+  const double unit = frame.metres_per_unit;
+  mesh.xyz.reserve(3 * tin.cells.size());
+  for (const std::uint32_t cell : tin.cells) {
+    const int c = static_cast<int>(cell % static_cast<std::uint32_t>(grid.width));
+    const int r = static_cast<int>(cell / static_cast<std::uint32_t>(grid.width));
+    mesh.xyz.insert(mesh.xyz.end(), {frame.u(c, r), frame.w(c, r), grid.z[cell] / unit});
+  }
+  mesh.faces = tin.faces;
+  fix_orientation(mesh);
+  return mesh;
+}
+
 }  // namespace dpts::core

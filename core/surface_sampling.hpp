@@ -33,6 +33,12 @@ GridTin grid_tin(const HeightGrid& grid, Diagonal diagonal = Diagonal::nw_se);
 // Reverses every face that is clockwise in mesh.xyz's x, y.
 void fix_orientation(TriMesh& mesh);
 
+// The grid TIN (grid_tin with delaunay_diagonal(frame)) in the frame: vertices (u, w, height in
+// frame units) of its cells, faces counter-clockwise. In the frame collinear cells stay exactly
+// collinear, so a fold test sees flat slivers along the outline of a reprojected DEM as flat
+// (QSlim works here). No faces when no three neighbouring cells are valid.
+TriMesh frame_grid_mesh(const HeightGrid& grid, const GridFrame& frame);
+
 // `count` points uniform in the area of the mesh (in x, y), seeded; z lifted onto the mesh.
 std::vector<SurfacePoint> sample_uniform(const TriMesh& mesh, std::size_t count,
                                          std::uint64_t seed);

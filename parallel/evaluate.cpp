@@ -22,7 +22,7 @@
 #include "core/geodesic_path.hpp"
 #include "core/surface_sampling.hpp"
 #include "parallel/exact_pairwise.hpp"
-#include "parallel/meta.hpp"
+#include "parallel/memory.hpp"
 
 namespace dpts::par {
 

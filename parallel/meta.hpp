@@ -96,18 +96,6 @@ std::size_t pieces_in_flight_bytes(const std::vector<core::Piece>& pieces, int h
 void check_memory(const core::RasterSource& dem, std::size_t target, std::size_t need,
                   std::size_t limit);
 
-// Peak resident memory of this process so far in kB (Linux VmHWM), 0 where unknown.
-std::size_t peak_rss_kb();
-// Resident memory of this process now in kB (Linux VmRSS), 0 where unknown.
-std::size_t rss_kb();
-
-// Memory this process may still use, in bytes: the system's MemAvailable, or less when a
-// cgroup (v2 memory.max, v1 limit_in_bytes) limits it; SIZE_MAX where unknown.
-std::size_t available_memory_bytes();
-
-// "12.3 GB" / "456 MB": a byte count for messages.
-std::string format_bytes(double bytes);
-
 // The piece value of the paper's CalcPieceValue on a window of heights: the mean ED/GD over
 // all pairs of `points` random points in the footprint (seeded), GD on the Steiner graph of
 // the grid TIN at the default delta. Windows larger than max_cells are subsampled (every s-th

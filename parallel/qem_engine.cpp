@@ -19,6 +19,7 @@
 #include "core/kd_division.hpp"
 #include "core/qem.hpp"
 #include "core/surface_sampling.hpp"
+#include "parallel/memory.hpp"
 #include "parallel/piece_support.hpp"
 
 namespace dpts::par {

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <mutex>
+#include <utility>
 
 #include "core/errors.hpp"
 
@@ -18,6 +19,27 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 }  // namespace
+
+namespace {
+constexpr std::pair<Algorithm, const char*> kAlgorithmNames[] = {
+    {Algorithm::vp, "vp"},           {Algorithm::pld, "pld"},
+    {Algorithm::vp_meta, "vp-meta"}, {Algorithm::pld_meta, "pld-meta"},
+    {Algorithm::qslim, "qslim"},     {Algorithm::qem, "qem"}};
+}  // namespace
+
+const char* name_of(Algorithm a) {
+  for (const auto& [algo, name] : kAlgorithmNames) {
+    if (algo == a) return name;
+  }
+  return "?";
+}
+
+std::optional<Algorithm> parse_algorithm(std::string_view name) {
+  for (const auto& [algo, n] : kAlgorithmNames) {
+    if (name == n) return algo;
+  }
+  return std::nullopt;
+}
 
 std::size_t target_count(const KeepTarget& target, std::size_t input) {
   std::size_t n = input;

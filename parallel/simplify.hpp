@@ -3,11 +3,34 @@
 
 #include <cstddef>
 #include <optional>
+#include <string_view>
 
 #include "core/elimination.hpp"
 #include "core/grid.hpp"
 
 namespace dpts::par {
+
+// The simplification methods (dpts-par --algo, the library's algo).
+enum class Algorithm {
+  vp,        // the paper's elimination with VP importance, whole DEM in memory
+  pld,       // ... with PLD importance
+  vp_meta,   // the paper's VP' piece engine (parallel/meta.hpp), out of core
+  pld_meta,  // the paper's PLD'
+  qslim,     // Garland-Heckbert quadric collapse (the paper's competitor), in memory
+  qem,       // dpts's quadric collapse in its piece engine (parallel/qem_engine.hpp): default
+};
+
+// "vp", "pld", "vp-meta", "pld-meta", "qslim", "qem".
+const char* name_of(Algorithm a);
+// The method a name above names, or none.
+std::optional<Algorithm> parse_algorithm(std::string_view name);
+// The paper's meta method (VP', PLD').
+inline bool is_meta(Algorithm a) { return a == Algorithm::vp_meta || a == Algorithm::pld_meta; }
+// The importance of the elimination methods: PLD for pld and pld-meta, else VP.
+inline core::Importance importance_of(Algorithm a) {
+  return a == Algorithm::pld || a == Algorithm::pld_meta ? core::Importance::pld
+                                                         : core::Importance::vp;
+}
 
 // How many vertices to keep: a percentage of the input's surface vertices (P2L) or a count.
 struct KeepTarget {

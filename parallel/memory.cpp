@@ -1,0 +1,76 @@
+// This process's memory: resident and peak sizes, what it may still use, and byte counts
+// for messages.
+#include "parallel/memory.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <optional>
+#include <string>
+
+namespace dpts::par {
+
+namespace {
+
+// A "Name:   123 kB" line of /proc/self/status, in kB; 0 where unknown.
+std::size_t status_kb(const char* name) {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  const std::size_t n = std::strlen(name);
+  while (std::getline(status, line)) {
+    if (line.compare(0, n, name) == 0) return std::strtoull(line.c_str() + n, nullptr, 10);
+  }
+  return 0;
+}
+
+}  // namespace
+
+std::size_t peak_rss_kb() { return status_kb("VmHWM:"); }
+
+std::size_t rss_kb() { return status_kb("VmRSS:"); }
+
+namespace {
+
+// The first number in a file (a cgroup limit or usage), or nullopt ("max", missing, unreadable).
+std::optional<double> read_number(const char* path) {
+  std::ifstream in(path);
+  double v = 0;
+  if (in >> v) return v;
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::size_t available_memory_bytes() {
+  double avail = std::numeric_limits<double>::infinity();
+  std::ifstream meminfo("/proc/meminfo");
+  std::string line;
+  while (std::getline(meminfo, line)) {
+    if (line.rfind("MemAvailable:", 0) == 0) avail = std::strtod(line.c_str() + 13, nullptr) * 1024;
+  }
+  const auto limit2 = read_number("/sys/fs/cgroup/memory.max");
+  const auto usage2 = read_number("/sys/fs/cgroup/memory.current");
+  if (limit2 && usage2) avail = std::min(avail, std::max(0.0, *limit2 - *usage2));
+  const auto limit1 = read_number("/sys/fs/cgroup/memory/memory.limit_in_bytes");
+  const auto usage1 = read_number("/sys/fs/cgroup/memory/memory.usage_in_bytes");
+  if (limit1 && usage1 && *limit1 < 1e18) avail = std::min(avail, std::max(0.0, *limit1 - *usage1));
+  return std::isfinite(avail) ? static_cast<std::size_t>(avail)
+                              : std::numeric_limits<std::size_t>::max();
+}
+
+std::string format_bytes(double bytes) {
+  char buf[32];
+  // Binary units, as --tile-mb and --max-memory count them.
+  if (bytes >= 1024.0 * (1 << 20)) {
+    std::snprintf(buf, sizeof buf, "%.1f GB", bytes / (1024.0 * (1 << 20)));
+  } else {
+    std::snprintf(buf, sizeof buf, "%.0f MB", std::ceil(bytes / (1 << 20)));
+  }
+  return buf;
+}
+
+}  // namespace dpts::par
