@@ -250,7 +250,7 @@ Evaluation evaluate(const std::string& dem, const std::string& mesh, const Evalu
     const auto start = std::chrono::steady_clock::now();
     const std::unique_ptr<api::Evaluation> e = api::load(request);
     SerialProgress serial(progress);
-    api::measure(*e, request, [&](const std::string& stage, double f) { return serial(f, stage); });
+    api::measure(*e, request, [&](double f, std::string_view stage) { return serial(f, stage); });
     Evaluation out;
     out.distance_error = e->result.distance_error;
     out.set_errors = e->result.set_errors;

@@ -107,7 +107,7 @@ std::unique_ptr<Evaluation> load(const EvalRequest& request,
   return e;
 }
 
-void measure(Evaluation& e, const EvalRequest& request, const par::StageProgress& progress) {
+void measure(Evaluation& e, const EvalRequest& request, const core::Progress& progress) {
   par::EvalOptions& eo = e.options;
   eo.snap_m = e.snap;
   // What the geodesics may use: the limit less what the run holds already, or what is free.

@@ -50,6 +50,6 @@ std::unique_ptr<Evaluation> load(const EvalRequest& request,
                                  const std::function<void(const io::Dem&)>& dem_read = {});
 
 // The surface distances compared (par::evaluate_distances), in the calling arena.
-void measure(Evaluation& e, const EvalRequest& request, const par::StageProgress& progress);
+void measure(Evaluation& e, const EvalRequest& request, const core::Progress& progress);
 
 }  // namespace dpts::api

@@ -401,7 +401,8 @@ int run(const Options& o) {
   constexpr double kProgressEvery = 10;
   double last_line = 0;
   int last_tenth = 0;
-  const par::StageProgress progress = [&](const std::string& what, double fraction) {
+  const core::Progress progress = [&](double fraction, std::string_view stage) {
+    const std::string what(stage);
     if (g_cancel.load(std::memory_order_relaxed) != 0) return false;
     const double elapsed =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

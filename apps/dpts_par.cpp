@@ -210,6 +210,7 @@ int run_qslim(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinter& printe
   // QSlim works in the frame (core::frame_grid_mesh), its result mapped to the output CRS.
   const core::TriMesh grid = core::frame_grid_mesh(dem.grid, dem.frame);
   if (grid.faces.empty()) throw InputError(o.input + ": " + kNothingToTriangulate);
+  if (!progress(0.0, o.algo_text.c_str())) throw Cancelled();
   const std::size_t input = grid.vertex_count();
   const std::size_t target = par::target_count(o.keep, input);
   core::QslimStats stats;

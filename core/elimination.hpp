@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/grid.hpp"
+#include "core/progress.hpp"
 
 namespace dpts::core {
 
@@ -63,9 +64,6 @@ struct Tin {
   std::vector<std::uint32_t> cells;
   std::vector<std::array<std::uint32_t, 3>> faces;
 };
-
-// Progress callback: fraction in [0, 1] of the current stage; return false to stop.
-using Progress = std::function<bool(double fraction, std::string_view stage)>;
 
 // Simplifies the Delaunay TIN of one DEM by vertex elimination.
 //

@@ -122,11 +122,18 @@ TriMesh qslim(const TriMesh& in, std::size_t keep, QslimStats* stats, const Prog
       throw std::invalid_argument("qslim: the mesh is not a manifold surface");
     }
   }
+  // note: building the mesh and its quadrics takes seconds on large meshes, before the first
+  // tick: a stop asked for meanwhile is honoured between them.
+  auto check = [&] {
+    if (progress && !progress(0.0, "simplify")) throw Cancelled();
+  };
+  check();
   QslimStats local;
   QslimStats& st = stats ? *stats : local;
   st.input_vertices = mesh.number_of_vertices();
   using Policies = SMS::GarlandHeckbert_plane_policies<Mesh, K>;
   Policies policies(mesh);
+  check();
   const BorderMap border{&mesh};
   const SMS::Constrained_placement<Policies::Get_placement, BorderMap> placement(
       border, policies.get_placement());

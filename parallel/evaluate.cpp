@@ -1,14 +1,15 @@
 // Parallel geodesic queries and the distance-preserving error.
 #include "parallel/evaluate.hpp"
 
+#include <tbb/concurrent_queue.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_pipeline.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -169,19 +170,16 @@ std::vector<double> meeting_radii(const std::vector<double>& c, std::size_t k) {
   return r;
 }
 
-// Finished meet searches that may wait for their joins, per worker: beyond its own search a
-// worker has up to this many waiting, so that it rarely idles for a join.
-constexpr std::size_t kKeptPerWorker = 2;
+// The most searches pairwise_distances holds at once with no bound given: besides one per
+// thread, up to two more each, waiting for their joins, so that a thread rarely idles.
+std::size_t unbounded_searches(std::size_t threads) { return 3 * threads - 1; }
 
-// The most searches pairwise_distances holds at once with no bound given.
-std::size_t unbounded_searches(std::size_t threads) { return (1 + kKeptPerWorker) * threads - 1; }
-
-// pairwise_distances in the current arena, at most max_kept finished meet queries waiting;
-// searched (if given) is called as each source's search is done.
+// pairwise_distances in the current arena, meeting searches with at most `tokens` queries at
+// once; searched (if given) is called as each source's search is done.
 std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
                                       const std::vector<core::SurfacePoint>& points,
                                       const PairwiseOptions& options, PairwiseStats& stats,
-                                      std::size_t max_kept, const std::function<void()>& searched) {
+                                      std::size_t tokens, const std::function<void()>& searched) {
   const PairwiseMethod method = options.method;
   const std::size_t k = points.size();
   std::vector<double> out(k * k, 0.0);
@@ -245,105 +243,59 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
   }
   const std::vector<double> radius = meeting_radii(c, k);  // pilots' radii: unused
 
-  // The other sources are searched to their radii in order, by as many workers as threads. A pair
-  // a < b is joined over a's shell (its settled nodes within w of its radius) with b's settled
-  // distances, so b's query is kept until every source before it has its shell; at most
-  // `max_kept` queries wait so, bounding memory.
+  // The other sources are searched to their radii in a oneTBB pipeline of at most `tokens`
+  // sources in flight, each holding one query: a serial stage hands out the sources in order,
+  // their searches run in parallel, and once every source before i has passed the in-order
+  // barrier (so has its shell: its settled nodes within w of its radius), i's query joins each
+  // pair a < i over a's shell with i's settled distances, in parallel, and goes back to the pool.
   std::vector<Shell> shells(k);
   std::vector<double> meet(k * k, inf);
-  std::vector<char> done(k, 0);
-  std::vector<std::size_t> waiting_for(k, 0);
-  std::vector<std::unique_ptr<core::GeodesicQuery>> kept(k);
-  std::vector<std::unique_ptr<core::GeodesicQuery>> pool;
+  std::vector<std::unique_ptr<core::GeodesicQuery>> owned;  // every query made (under m)
+  tbb::concurrent_queue<core::GeodesicQuery*> pool;         // the ones free
   std::mutex m;
-  std::condition_variable cv;
-  std::size_t kept_count = 0;
-  const auto workers = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
-  std::size_t next = pilots;  // the next source to search (under m)
-  auto join = [&](std::size_t a, std::size_t b, const core::GeodesicQuery& qb) {
-    double best = inf;
-    for (const auto& [v, da] : shells[a]) {
-      const double db = qb.settled_distance(v);
-      if (db < inf) best = std::min(best, da + db);
-    }
-    meet[a * k + b] = best;
+  struct Item {
+    std::size_t i = 0;
+    core::GeodesicQuery* query = nullptr;
   };
-  bool failed = false;  // a worker threw (out of memory): the others stop instead of waiting
-  auto work = [&] {
-    std::vector<double> d;
-    for (;;) {
-      // note: the query first, then the source: a worker waiting for a query holds no source,
-      // so every source a kept query waits for is being searched (no deadlock).
-      std::unique_ptr<core::GeodesicQuery> q;
-      std::size_t i = 0;
-      {
-        std::unique_lock<std::mutex> lock(m);
-        cv.wait(lock, [&] { return kept_count < max_kept || next >= k || failed; });
-        if (failed) return;
-        i = next++;
-        if (i >= k) return;
-        if (!pool.empty()) {
-          q = std::move(pool.back());
-          pool.pop_back();
-        }
-      }
-      if (!q) q = std::make_unique<core::GeodesicQuery>(graph);
-      const auto targets = others(i);
-      q->explore(points[i], targets, radius[i], radius[i] - w, shells[i], d);
-      settled_by[i] = q->settled();
-      for (std::size_t j = 0, t = 0; j < k; ++j) {
-        if (j != i) direct[i * k + j] = d[t++];
-      }
-      if (searched) searched();
-      // Pairs to join now: (a, i) for the sources a before i with shells, and (i, b) for the
-      // kept queries b after i. i's query is kept until its own joins are done and every
-      // source before i has joined with it (waiting_for counts both).
-      std::vector<std::size_t> before, after;
-      const core::GeodesicQuery* qi = q.get();
-      {
-        std::lock_guard<std::mutex> lock(m);
-        done[i] = 1;
-        waiting_for[i] = 1;
-        for (std::size_t a = pilots; a < i; ++a) {
-          if (done[a]) {
-            before.push_back(a);
-          } else {
-            ++waiting_for[i];  // a is being searched: it joins with i when done
-          }
-        }
-        for (std::size_t b = i + 1; b < k; ++b) {
-          if (kept[b]) after.push_back(b);
-        }
-        kept[i] = std::move(q);
-        ++kept_count;
-      }
-      for (std::size_t a : before) join(a, i, *qi);
-      for (std::size_t b : after) join(i, b, *kept[b]);
-      {
-        std::lock_guard<std::mutex> lock(m);
-        after.push_back(i);
-        for (std::size_t b : after) {
-          if (--waiting_for[b] == 0) {
-            pool.push_back(std::move(kept[b]));
-            --kept_count;
-          }
-        }
-      }
-      cv.notify_all();
-    }
-  };
-  tbb::parallel_for(std::size_t{0}, workers, [&](std::size_t) {
-    try {
-      work();
-    } catch (...) {
-      {
-        std::lock_guard<std::mutex> lock(m);
-        failed = true;
-      }
-      cv.notify_all();
-      throw;
-    }
-  });
+  std::size_t next = pilots;
+  tbb::parallel_pipeline(
+      tokens, tbb::make_filter<void, std::size_t>(tbb::filter_mode::serial_in_order,
+                                                  [&](tbb::flow_control& fc) -> std::size_t {
+                                                    if (next >= k) fc.stop();
+                                                    return next++;
+                                                  }) &
+                  tbb::make_filter<std::size_t, Item>(
+                      tbb::filter_mode::parallel,
+                      [&](std::size_t i) {
+                        core::GeodesicQuery* q = nullptr;
+                        if (!pool.try_pop(q)) {
+                          auto made = std::make_unique<core::GeodesicQuery>(graph);
+                          q = made.get();
+                          std::lock_guard<std::mutex> lock(m);
+                          owned.push_back(std::move(made));
+                        }
+                        std::vector<double> d;
+                        q->explore(points[i], others(i), radius[i], radius[i] - w, shells[i], d);
+                        settled_by[i] = q->settled();
+                        for (std::size_t j = 0, t = 0; j < k; ++j) {
+                          if (j != i) direct[i * k + j] = d[t++];
+                        }
+                        if (searched) searched();
+                        return Item{i, q};
+                      }) &
+                  tbb::make_filter<Item, Item>(tbb::filter_mode::serial_in_order,
+                                               [](Item item) { return item; }) &
+                  tbb::make_filter<Item, void>(tbb::filter_mode::parallel, [&](Item item) {
+                    for (std::size_t a = pilots; a < item.i; ++a) {
+                      double best = inf;
+                      for (const auto& [v, da] : shells[a]) {
+                        const double db = item.query->settled_distance(v);
+                        if (db < inf) best = std::min(best, da + db);
+                      }
+                      meet[a * k + item.i] = best;
+                    }
+                    pool.push(item.query);
+                  }));
   // note: every value below comes from searches and joins whose results do not depend on the
   // thread count, chosen by a fixed rule, so the figures are the same for any --threads.
   std::vector<char> left(k * k, 0);
@@ -364,8 +316,7 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
     }
   }
   for (std::size_t n : settled_by) stats.settled += static_cast<double>(n);
-  kept.clear();  // the one-way queries below take their memory
-  pool.clear();
+  owned.clear();  // the one-way queries below take their memory
   if (left_count > 0) measure_one_way(graph, points, left, false, out, stats, nullptr);
   stats.one_way_pairs += left_count;
   return out;
@@ -380,18 +331,15 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
       options.straighten ? PairwiseMethod::kOneWay : options.method;  // paths need one way
   const std::size_t max_searches = options.max_searches;
   const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
-  std::size_t workers = threads, max_kept = kKeptPerWorker * threads;
+  std::size_t workers = threads, tokens = unbounded_searches(threads);
   if (max_searches > 0) {
     if (max_searches < min_searches(method)) {
       throw std::invalid_argument("pairwise_distances: fewer searches than it needs at once");
     }
-    // note: one way, each worker holds one query. Meeting, a worker starts a search only while
-    // fewer than max_kept finished ones wait, and every other worker holds one: at most
-    // max_kept + workers - 1 at once (the one-way leftovers run after those are freed). As many
-    // workers as leave each a waiting place (max_kept >= workers), up to kKeptPerWorker each.
+    // note: one way, each worker holds one query: as many workers as searches. Meeting, each
+    // source in the pipeline holds one (the one-way leftovers run after those are freed).
     if (method == PairwiseMethod::kMeet) {
-      workers = std::min(threads, std::max<std::size_t>(1, (max_searches + 1) / 2));
-      max_kept = std::min(kKeptPerWorker * workers, max_searches + 1 - workers);
+      tokens = max_searches;
     } else {
       workers = std::min(threads, max_searches);
     }
@@ -407,16 +355,16 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
   }
   PairwiseStats local;
   PairwiseStats& st = stats ? *stats : local;
-  if (workers == threads) return pairwise_in_arena(graph, points, options, st, max_kept, searched);
+  if (workers == threads) return pairwise_in_arena(graph, points, options, st, tokens, searched);
   tbb::task_arena arena(static_cast<int>(workers));
   return arena.execute(
-      [&] { return pairwise_in_arena(graph, points, options, st, max_kept, searched); });
+      [&] { return pairwise_in_arena(graph, points, options, st, tokens, searched); });
 }
 
 EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh& simplified,
-                              const EvalOptions& options, const StageProgress& progress) {
+                              const EvalOptions& options, const core::Progress& progress) {
   auto stage = [&](const std::string& what) {
-    if (progress && !progress(what, 0.0)) throw Cancelled();
+    if (progress && !progress(0.0, what)) throw Cancelled();
   };
   EvalResult result;
   result.exact = options.exact;
@@ -503,7 +451,7 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
       if (progress) {
         // note: the exact sources take seconds each: a stop ends the stage at once
         on_source = [&](std::size_t done) {
-          return progress(name, static_cast<double>(done) / static_cast<double>(k - 1));
+          return progress(static_cast<double>(done) / static_cast<double>(k - 1), name);
         };
       }
       d = exact_pairwise_distances(on_t ? *exact_t : *exact_s, points, on_source);
@@ -514,7 +462,7 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
       po.max_searches = result.max_searches;
       if (progress) {
         po.on_search = [&](std::size_t searched) {
-          if (!progress(name, static_cast<double>(searched) / static_cast<double>(k))) stop = true;
+          if (!progress(static_cast<double>(searched) / static_cast<double>(k), name)) stop = true;
         };
       }
       d = pairwise_distances(on_t ? *graph_t : *graph_s, points, po, &stats);

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/progress.hpp"
 #include "core/steiner_graph.hpp"
 
 namespace dpts::par {
@@ -151,8 +152,7 @@ struct EvalResult {
 // between them; and in the geodesic stages as each search finishes, with the fraction of the
 // sources searched (serialized, from worker threads). Returning false stops the run with
 // dpts::Cancelled (at the end of the stage when returned during one).
-using StageProgress = std::function<bool(const std::string& stage, double fraction)>;
 EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh& simplified,
-                              const EvalOptions& options, const StageProgress& progress = nullptr);
+                              const EvalOptions& options, const core::Progress& progress = nullptr);
 
 }  // namespace dpts::par

@@ -238,8 +238,8 @@ TEST_CASE("progress tells each stage as it starts and the sources searched in ge
   tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
   // note: no lock: the reports are serialized by contract (the TSan build checks it).
   std::vector<std::pair<std::string, double>> calls;
-  par::evaluate_distances(t, s, opt, [&](const std::string& stage, double fraction) {
-    calls.emplace_back(stage, fraction);
+  par::evaluate_distances(t, s, opt, [&](double fraction, std::string_view stage) {
+    calls.emplace_back(std::string(stage), fraction);
     return true;
   });
   std::vector<std::string> stages;
@@ -272,7 +272,7 @@ TEST_CASE("progress answering false during a geodesic stage stops the run at its
   const auto opt = eval_options(12, 2);
   int searches = 0;
   CHECK_THROWS_AS(par::evaluate_distances(t, t, opt,
-                                          [&](const std::string&, double fraction) {
+                                          [&](double fraction, std::string_view) {
                                             if (fraction > 0) ++searches;
                                             return fraction == 0;
                                           }),
