@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "core/grid.hpp"
+#include "core/mesh.hpp"
 #include "core/progress.hpp"
 
 namespace dpts::core {
@@ -56,14 +57,9 @@ struct Removal {
   std::uint32_t prev = 0, next = 0;
 };
 
-// A TIN over a DEM: vertices are cells (row-major indices, ascending), faces index into
-// `cells`, counter-clockwise seen from above, rotated to start at their smallest index and
-// sorted. Every face lies in the DEM's valid footprint (see footprint.hpp) and together they
-// cover it exactly once.
-struct Tin {
-  std::vector<std::uint32_t> cells;
-  std::vector<std::array<std::uint32_t, 3>> faces;
-};
+// The simplified TIN is a core::Tin (mesh.hpp): counter-clockwise faces seen from above,
+// rotated to start at their smallest index and sorted; every face lies in the DEM's valid
+// footprint (footprint.hpp) and together they cover it exactly once.
 
 // Simplifies the Delaunay TIN of one DEM by vertex elimination.
 //

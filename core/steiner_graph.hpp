@@ -16,15 +16,9 @@
 #include <vector>
 
 #include "core/huge_pages.hpp"
+#include "core/mesh.hpp"
 
 namespace dpts::core {
-
-// A triangle mesh in metres: x, y in a metric CRS, z height. Faces counter-clockwise.
-struct TriMesh {
-  std::vector<double> xyz;
-  std::vector<std::array<std::uint32_t, 3>> faces;
-  std::size_t vertex_count() const { return xyz.size() / 3; }
-};
 
 // Mean 3D length of the mesh's edges (each undirected edge once).
 double mean_edge_length(const TriMesh& mesh);

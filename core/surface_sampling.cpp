@@ -80,8 +80,8 @@ Diagonal delaunay_diagonal(const GridFrame& f) {
                                                                  : Diagonal::nw_se;
 }
 
-GridTin grid_tin(const HeightGrid& g, Diagonal diagonal) {
-  GridTin t;
+Tin grid_tin(const HeightGrid& g, Diagonal diagonal) {
+  Tin t;
   t.cells = surface_cells(g);
   // Surface cell -> vertex index.
   std::vector<std::uint32_t> index(g.cell_count(), 0xFFFFFFFFu);
@@ -237,7 +237,7 @@ std::optional<PointLocator::Hit> PointLocator::locate(double x, double y, double
 }
 
 TriMesh frame_grid_mesh(const HeightGrid& grid, const GridFrame& frame) {
-  const GridTin tin = grid_tin(grid, delaunay_diagonal(frame));
+  const Tin tin = grid_tin(grid, delaunay_diagonal(frame));
   TriMesh mesh;
   if (tin.faces.empty()) return mesh;
   const double unit = frame.metres_per_unit;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/grid.hpp"
+#include "core/mesh.hpp"
 #include "core/steiner_graph.hpp"
 
 namespace dpts::core {
@@ -24,11 +25,7 @@ Diagonal delaunay_diagonal(const GridFrame& frame);
 // footprint, see footprint.hpp). With delaunay_diagonal(frame) this is the Delaunay TIN the
 // elimination starts from. Vertices are the surface cells (ascending); faces index them, in
 // the grid's orientation (fix_orientation() makes them counter-clockwise in a given CRS).
-struct GridTin {
-  std::vector<std::uint32_t> cells;
-  std::vector<std::array<std::uint32_t, 3>> faces;
-};
-GridTin grid_tin(const HeightGrid& grid, Diagonal diagonal = Diagonal::nw_se);
+Tin grid_tin(const HeightGrid& grid, Diagonal diagonal = Diagonal::nw_se);
 
 // Reverses every face that is clockwise in mesh.xyz's x, y.
 void fix_orientation(TriMesh& mesh);

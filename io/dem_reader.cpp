@@ -647,7 +647,7 @@ core::HeightGrid WindowReader::read(int col0, int row0, int width, int height,
 }
 
 core::TriMesh Dem::grid_mesh() const {
-  const core::GridTin tin = core::grid_tin(grid, core::delaunay_diagonal(frame));
+  const core::Tin tin = core::grid_tin(grid, core::delaunay_diagonal(frame));
   if (tin.faces.empty()) throw InputError(path + ": " + kNothingToTriangulate);
   core::TriMesh mesh;
   const auto xy = output_xy(tin.cells);

@@ -7,14 +7,14 @@
 #include <string>
 #include <vector>
 
+#include "core/mesh.hpp"
+
 namespace dpts::io {
 
-struct Mesh {
-  std::vector<double> xyz;                          // x0, y0, z0, x1, ...
-  std::vector<std::array<std::uint32_t, 3>> faces;  // counter-clockwise seen from above
-  std::vector<std::string> comments;                // header comments, in order
-
-  std::size_t vertex_count() const { return xyz.size() / 3; }
+// A mesh as a file holds it: core::TriMesh (faces counter-clockwise seen from above) and the
+// header comments, in order.
+struct Mesh : core::TriMesh {
+  std::vector<std::string> comments;
 };
 
 enum class PlyFormat { binary_little_endian, ascii };

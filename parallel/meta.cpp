@@ -231,7 +231,7 @@ double piece_value(const core::HeightGrid& window, int col0, int row0, const cor
     for (int i = 0; i < sub.width; ++i)
       sub.z[sub.index(i, j)] = window.z[window.index(i * s, j * s)];
   }
-  const core::GridTin tin = core::grid_tin(sub, core::delaunay_diagonal(frame));
+  const core::Tin tin = core::grid_tin(sub, core::delaunay_diagonal(frame));
   if (tin.faces.empty() || points < 2) return 1.0;
   core::TriMesh mesh;
   const double m = frame.metres_per_unit;

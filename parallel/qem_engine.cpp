@@ -221,7 +221,7 @@ QemPieceMesh simplify_piece(const core::RasterSource& dem, const Positions& posi
   const int ww = wc1 - wc0, wh = wr1 - wr0;
   core::HeightGrid grid = read_window(dem, wc0, wr0, ww, wh, report.read_s);
   const auto t0 = std::chrono::steady_clock::now();
-  const core::GridTin tin = core::grid_tin(grid, core::delaunay_diagonal(dem.frame()));
+  const core::Tin tin = core::grid_tin(grid, core::delaunay_diagonal(dem.frame()));
   QemPieceMesh out;
   if (tin.faces.empty()) return out;
   const double unit = dem.frame().metres_per_unit;

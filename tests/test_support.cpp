@@ -61,7 +61,7 @@ core::TriMesh hills_mesh(int w, int h) {
     if (c + r < 3) return kVoid;
     return 10.0 * std::sin(c * 0.3) * std::cos(r * 0.25) + 0.3 * c;
   });
-  const core::GridTin tin = core::grid_tin(g);
+  const core::Tin tin = core::grid_tin(g);
   core::TriMesh m;
   for (std::uint32_t cell : tin.cells) {
     const double c = cell % static_cast<std::uint32_t>(w), r = cell / static_cast<std::uint32_t>(w);

@@ -200,7 +200,7 @@ TEST_CASE("the unsimplified TIN takes the frame's Delaunay diagonal, as grid_tin
     const auto frame = core::GridFrame::from_jacobian(j);
     const std::size_t input = core::surface_cells(g).size();
     const core::Tin tin = simplify(g, core::Importance::vp, input, frame);
-    const core::GridTin grid = core::grid_tin(g, core::delaunay_diagonal(frame));
+    const core::Tin grid = core::grid_tin(g, core::delaunay_diagonal(frame));
     // The same triangles, as sets of cells.
     auto as_sets = [](const std::vector<std::uint32_t>& cells, const auto& faces) {
       std::vector<std::array<std::uint32_t, 3>> out;

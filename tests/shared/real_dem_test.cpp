@@ -137,7 +137,7 @@ TEST_CASE("Andorra SRTM voids: qem keeps the footprint, and the pinched outline 
   const io::Dem dem = io::read_dem(test::shared_data("pyrenees_andorra_voids.tif"), {}, nullptr);
   // The grid TIN in the frame, as dpts-par gives it to qem: voids touching at a corner pinch
   // the outline at a vertex there.
-  const core::GridTin tin = core::grid_tin(dem.grid, core::delaunay_diagonal(dem.frame));
+  const core::Tin tin = core::grid_tin(dem.grid, core::delaunay_diagonal(dem.frame));
   core::TriMesh in;
   for (std::uint32_t cell : tin.cells) {
     const int c = static_cast<int>(cell % static_cast<std::uint32_t>(dem.width));

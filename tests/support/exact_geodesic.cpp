@@ -30,7 +30,7 @@ core::TriMesh dem_crop(const std::string& path, int c0, int r0, int size) {
       crop.z.push_back(z);
     }
   }
-  const core::GridTin grid = core::grid_tin(crop);
+  const core::Tin grid = core::grid_tin(crop);
   core::TriMesh mesh;
   const double s = dem.frame.metres_per_unit;
   for (std::uint32_t cell : grid.cells) {
