@@ -118,37 +118,50 @@ file appears only when complete. Exit status: 0 ok, 1 failure, 2 bad usage.
 )";
 }
 
+bool ArgReader::next() {
+  if (started_) ++i_;
+  started_ = true;
+  if (!done_ && i_ < args_.size() && args_[i_] == "--") {
+    done_ = true;
+    ++i_;
+  }
+  if (i_ >= args_.size()) return false;
+  first_ = i_;
+  arg_ = args_[i_];
+  flag_ = !done_ && arg_.size() > 1 && arg_[0] == '-';
+  has_inline_ = false;
+  if (flag_ && arg_.rfind("--", 0) == 0) {
+    const auto eq = arg_.find('=');
+    if (eq != std::string::npos) {
+      inline_ = arg_.substr(eq + 1);
+      arg_.resize(eq);
+      has_inline_ = true;
+    }
+  }
+  return true;
+}
+
+std::string ArgReader::value() {
+  if (has_inline_) {
+    has_inline_ = false;  // taken: a second value is the next argument
+    return inline_;
+  }
+  if (i_ + 1 >= args_.size()) throw UsageError(arg_ + ": missing value");
+  return args_[++i_];
+}
+
 ParOptions parse_par(const std::vector<std::string>& args) {
   ParOptions o;
   std::vector<std::string> positional;
   bool keep_seen = false, vertices_seen = false;
-  bool options_done = false;  // after "--" every argument is a path
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::size_t first = i;
-    std::string arg = args[i];
-    if (options_done) {
+  ArgReader in(args);
+  while (in.next()) {
+    const std::string arg = in.arg();
+    if (!in.is_flag()) {
       positional.push_back(arg);
       continue;
     }
-    if (arg == "--") {
-      options_done = true;
-      continue;
-    }
-    std::string value;
-    bool has_inline = false;
-    if (arg.rfind("--", 0) == 0) {
-      const auto eq = arg.find('=');
-      if (eq != std::string::npos) {
-        value = arg.substr(eq + 1);
-        arg = arg.substr(0, eq);
-        has_inline = true;
-      }
-    }
-    auto need = [&](const std::string& flag) {
-      if (has_inline) return value;
-      if (i + 1 >= args.size()) throw UsageError(flag + ": missing value");
-      return args[++i];
-    };
+    auto need = [&](const std::string&) { return in.value(); };
     if (arg == "--help" || arg == "-h") {
       o.help = true;
     } else if (arg == "--version") {
@@ -243,20 +256,22 @@ ParOptions parse_par(const std::vector<std::string>& args) {
     } else if (arg == "--quiet" || arg == "-q") {
       o.quiet = true;
     } else if (arg == "--config") {
-      if (i + 2 >= args.size()) throw UsageError("--config: expected KEY VALUE");
-      o.config.emplace_back(args[i + 1], args[i + 2]);
-      i += 2;
-    } else if (arg.size() > 1 && arg[0] == '-') {
-      throw UsageError(arg + ": unknown option");
+      std::string key, value;
+      try {
+        key = in.value();
+        value = in.value();
+      } catch (const UsageError&) {
+        throw UsageError("--config: expected KEY VALUE");
+      }
+      o.config.emplace_back(key, value);
     } else {
-      positional.push_back(arg);
-      continue;
+      throw UsageError(arg + ": unknown option");
     }
     static const char* batch_only[] = {"--batch", "--out-dir", "--jobs", "--threads",
                                        "--max-memory", "--report", "--quiet", "-q"};
     if (std::find(std::begin(batch_only), std::end(batch_only), arg) == std::end(batch_only)) {
-      o.child_args.insert(o.child_args.end(), args.begin() + static_cast<long>(first),
-                          args.begin() + static_cast<long>(i) + 1);
+      const std::vector<std::string> taken = in.taken();
+      o.child_args.insert(o.child_args.end(), taken.begin(), taken.end());
     }
   }
   if (o.help || o.version) return o;

@@ -86,6 +86,32 @@ std::size_t memory_limit_bytes(const ParOptions& o);
 ParOptions parse_par(const std::vector<std::string>& args);
 std::string par_help();
 
+// Reads a command line for every dpts tool: flags (--name, --name=value, -x) with their
+// values, and positional arguments; after "--" every argument is positional.
+class ArgReader {
+ public:
+  explicit ArgReader(const std::vector<std::string>& args) : args_(args) {}
+  // Moves to the next argument ("--" itself is skipped); false at the end.
+  bool next();
+  // Whether the argument is a flag: it starts with '-', is not "-" alone, and comes before "--".
+  bool is_flag() const { return flag_; }
+  // The argument; for a flag its name, without an inline "=value".
+  const std::string& arg() const { return arg_; }
+  // The flag's value: its inline one (once), else the next argument (UsageError "FLAG: missing
+  // value").
+  std::string value();
+  // The arguments the current one took as given: itself, and its value if that came next.
+  std::vector<std::string> taken() const {
+    return {args_.begin() + static_cast<long>(first_), args_.begin() + static_cast<long>(i_) + 1};
+  }
+
+ private:
+  const std::vector<std::string>& args_;
+  std::size_t i_ = 0, first_ = 0;
+  bool started_ = false, flag_ = false, done_ = false, has_inline_ = false;
+  std::string arg_, inline_;
+};
+
 // Prints "<prog>: <stage> NN%" to stderr once a run has lasted a second: rewriting one line
 // on a terminal, one line per 10 % otherwise. Returns false once a cancel was requested.
 class ProgressPrinter {

@@ -133,12 +133,11 @@ Options parse(const std::vector<std::string>& args) {
   Options o;
   // Flags given explicitly, for the combinations refused.
   std::vector<std::string> given;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= args.size()) throw UsageError(a + ": missing value");
-      return args[++i];
-    };
+  dpts::cli::ArgReader in(args);
+  while (in.next()) {
+    const std::string a = in.arg();
+    if (!in.is_flag()) throw UsageError(a + ": unexpected argument");
+    auto value = [&] { return in.value(); };
     if (a.rfind("--", 0) == 0) given.push_back(a);
     if (a == "--help" || a == "-h") {
       o.help = true;
@@ -183,7 +182,7 @@ Options parse(const std::vector<std::string>& args) {
     } else if (a == "--quiet" || a == "-q") {
       o.quiet = true;
     } else {
-      throw UsageError(a + (a.rfind("-", 0) == 0 ? ": unknown option" : ": unexpected argument"));
+      throw UsageError(a + ": unknown option");
     }
   }
   if (!o.help && !o.version && (o.dem.empty() || o.mesh.empty())) {

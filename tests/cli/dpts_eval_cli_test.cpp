@@ -303,6 +303,24 @@ TEST_CASE("dpts-eval draws the error map and the hillshades, only when the run s
   CHECK(nowhere.err.find("/nonexistent/s.png") != std::string::npos);
 }
 
+TEST_CASE("dpts-eval reads flags as dpts-par does: --flag=value, and -- ends the flags",
+          "[cli][eval]") {
+  Fixture fx;
+  const auto mesh = simplified_mesh(fx);
+  const auto r = test::run(
+      kEval, {"--quiet", "--json", "--points=4", "--sets=1", "--dem=" + fx.dem, "--mesh", mesh});
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK(io::json_field(last_line(r.out), "points") == "4");
+  CHECK(io::json_field(last_line(r.out), "sets") == "1");
+  const auto after = test::run(kEval, {"--dem", fx.dem, "--mesh", mesh, "--", "--points"});
+  CHECK(after.exit_code == 2);
+  CHECK(after.err.rfind("dpts-eval: --points: unexpected argument\n", 0) == 0);
+  const auto missing = test::run(kEval, {"--dem", fx.dem, "--mesh"});
+  CHECK(missing.exit_code == 2);
+  CHECK(missing.err.rfind("dpts-eval: --mesh: missing value\n", 0) == 0);
+}
+
 TEST_CASE("dpts-eval refuses --points whose pair tables cannot fit, before any work",
           "[cli][eval][robust]") {
   Fixture fx;
