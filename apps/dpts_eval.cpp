@@ -338,6 +338,73 @@ Pictures draw_pictures(const dpts::io::Dem& dem, const dpts::core::PointLocator&
   return p;
 }
 
+// The text report on stdout (what --quiet leaves out).
+void print_report(const Options& o, const dpts::api::Evaluation& ev, double secs) {
+  using namespace dpts;
+  const core::TriMesh& t = ev.t;
+  const core::TriMesh& s = ev.s;
+  const par::EvalResult& r = ev.result;
+  const par::EvalOptions& eo = ev.options;
+  const bool given = !eo.sample_xy.empty();
+  std::printf("dem              %s: %zu vertices, %zu faces (grid TIN)\n", o.dem.c_str(),
+              t.vertex_count(), t.faces.size());
+  std::printf("mesh             %s: %zu vertices, %zu faces\n", o.mesh.c_str(), s.vertex_count(),
+              s.faces.size());
+  if (ev.merged > 0) {
+    std::printf("welded           %zu vertices at the position of an earlier one merged into it\n",
+                ev.merged);
+  }
+  std::printf(
+      "validity         %zu faces not counter-clockwise, %zu bad edges, %zu faces over no-data\n",
+      ev.validity.clockwise_or_flat, ev.validity.bad_edges, ev.over_nodata);
+  std::printf("coverage         mesh area / footprint area = %.9f\n",
+              ev.validity.area / ev.footprint_area);
+  std::printf(
+      "vertical error   RMSE %.4f m, max %.4f m over %zu cell centres (%zu outside the mesh)\n",
+      ev.rmse, ev.vmax, ev.measured, ev.uncovered);
+  if (r.exact) {
+    std::printf("geodesics        exact (CGAL Surface_mesh_shortest_path): T %.2f s, T' %.2f s\n",
+                r.original_s, r.simplified_s);
+  } else {
+    std::printf(
+        "steiner graphs   T delta %.4f m, %zu nodes (%.2f s); T' delta %.4f m, %zu nodes "
+        "(%.2f s)\n",
+        r.delta_m, r.original_nodes, r.original_s, r.delta_mesh_m, r.simplified_nodes,
+        r.simplified_s);
+    if (eo.straighten) {
+      std::printf(
+          "geodesics        Steiner paths straightened: %zu paths (%zu could not be, their "
+          "Steiner length kept)\n",
+          r.straightened, r.straighten_failed);
+    } else {
+      std::printf("geodesics        Steiner distances (the paper's; not straightened)\n");
+    }
+    const std::string bound =
+        r.max_searches ? "at most " + std::to_string(r.max_searches) + " searches at once"
+                       : "no bound on searches";
+    std::printf("memory           graphs about %s, a search %s (%s)\n",
+                par::format_bytes(static_cast<double>(r.graphs_bytes)).c_str(),
+                par::format_bytes(static_cast<double>(r.search_bytes)).c_str(), bound.c_str());
+    std::printf(
+        "searched         %.1f %% of T, %.1f %% of T' per query on average (pairs measured one "
+        "way: %zu on T, %zu on T')\n",
+        100 * r.original_searched, 100 * r.simplified_searched, r.original_one_way,
+        r.simplified_one_way);
+  }
+  std::printf(
+      "pairs            %zu measured; left out: %zu not connected on T, %zu at distance 0\n",
+      r.pairs_measured, r.pairs_unconnected, r.pairs_coincident);
+  for (std::size_t i = 0; i < r.set_errors.size(); ++i) {
+    // note: given sets keep the numbers of their file (from 0)
+    std::printf("distance error   %sset %zu: %.6f\n", given ? "sample " : "", given ? i : i + 1,
+                r.set_errors[i]);
+  }
+  std::printf("distance error   %.6f (mean of %d sets of %d points%s; %zu points snapped)\n",
+              r.distance_error, eo.sets, eo.points,
+              given ? (" from " + o.sample_points).c_str() : "", r.snapped);
+  std::printf("time             %.2f s\n", secs);
+}
+
 int run(const Options& o) {
   using namespace dpts;
   if (o.help) {
@@ -381,7 +448,6 @@ int run(const Options& o) {
     if (!o.hillshade.empty()) hillshade_out.emplace(o.hillshade);
   });
   const io::Dem& dem = ev->dem;
-  const core::TriMesh& t = ev->t;
   const core::TriMesh& s = ev->s;
   // The pictures, drawn now (their rasters freed before the geodesics) and written at the end.
   std::string error_map_png, hillshade_png;
@@ -435,7 +501,6 @@ int run(const Options& o) {
   }
   api::measure(*ev, request, progress);
   const par::EvalResult& r = ev->result;
-  const par::EvalOptions& eo = ev->options;
   const double secs =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (pairs_out) {
@@ -444,68 +509,8 @@ int run(const Options& o) {
     for (const auto& p : r.pairs) records.push_back({p.set, p.i, p.j, p.on_t, p.on_s});
     pairs_out->write(records);
   }
-  const bool given = !eo.sample_xy.empty();
 
-  if (!o.quiet) {
-    std::printf("dem              %s: %zu vertices, %zu faces (grid TIN)\n", o.dem.c_str(),
-                t.vertex_count(), t.faces.size());
-    std::printf("mesh             %s: %zu vertices, %zu faces\n", o.mesh.c_str(), s.vertex_count(),
-                s.faces.size());
-    if (ev->merged > 0) {
-      std::printf(
-          "welded           %zu vertices at the position of an earlier one merged into it\n",
-          ev->merged);
-    }
-    std::printf(
-        "validity         %zu faces not counter-clockwise, %zu bad edges, %zu faces over no-data\n",
-        ev->validity.clockwise_or_flat, ev->validity.bad_edges, ev->over_nodata);
-    std::printf("coverage         mesh area / footprint area = %.9f\n",
-                ev->validity.area / ev->footprint_area);
-    std::printf(
-        "vertical error   RMSE %.4f m, max %.4f m over %zu cell centres (%zu outside the mesh)\n",
-        ev->rmse, ev->vmax, ev->measured, ev->uncovered);
-    if (r.exact) {
-      std::printf("geodesics        exact (CGAL Surface_mesh_shortest_path): T %.2f s, T' %.2f s\n",
-                  r.original_s, r.simplified_s);
-    } else {
-      std::printf(
-          "steiner graphs   T delta %.4f m, %zu nodes (%.2f s); T' delta %.4f m, %zu nodes "
-          "(%.2f s)\n",
-          r.delta_m, r.original_nodes, r.original_s, r.delta_mesh_m, r.simplified_nodes,
-          r.simplified_s);
-      if (eo.straighten) {
-        std::printf(
-            "geodesics        Steiner paths straightened: %zu paths (%zu could not be, their "
-            "Steiner length kept)\n",
-            r.straightened, r.straighten_failed);
-      } else {
-        std::printf("geodesics        Steiner distances (the paper's; not straightened)\n");
-      }
-      const std::string bound =
-          r.max_searches ? "at most " + std::to_string(r.max_searches) + " searches at once"
-                         : "no bound on searches";
-      std::printf("memory           graphs about %s, a search %s (%s)\n",
-                  par::format_bytes(static_cast<double>(r.graphs_bytes)).c_str(),
-                  par::format_bytes(static_cast<double>(r.search_bytes)).c_str(), bound.c_str());
-      std::printf(
-          "searched         %.1f %% of T, %.1f %% of T' per query on average (pairs measured one "
-          "way: %zu on T, %zu on T')\n",
-          100 * r.original_searched, 100 * r.simplified_searched, r.original_one_way,
-          r.simplified_one_way);
-    }
-    std::printf(
-        "pairs            %zu measured; left out: %zu not connected on T, %zu at distance 0\n",
-        r.pairs_measured, r.pairs_unconnected, r.pairs_coincident);
-    for (std::size_t i = 0; i < r.set_errors.size(); ++i) {
-      // note: given sets keep the numbers of their file (from 0)
-      std::printf("distance error   %sset %zu: %.6f\n", given ? "sample " : "", given ? i : i + 1,
-                  r.set_errors[i]);
-    }
-    std::printf("distance error   %.6f (mean of %d sets of %d points%s; %zu points snapped)\n",
-                r.distance_error, eo.sets, eo.points,
-                given ? (" from " + o.sample_points).c_str() : "", r.snapped);
-    std::printf("time             %.2f s\n", secs);
-  }
+  if (!o.quiet) print_report(o, *ev, secs);
   if (o.json) std::cout << ev->json(request, threads, secs) << "\n";
   // note: stdout first: a run whose report cannot be written fails, and leaves no pairs file.
   check_stdout();
