@@ -40,6 +40,17 @@ void put_number(std::string& buf, T v) {
   buf.append(tmp, res.ptr);
 }
 
+// "a b c\n" (a vertex's x y z, a face's indices) in shortest round-trip text.
+template <typename T>
+void put_xyz_line(std::string& buf, const T* xyz) {
+  put_number(buf, xyz[0]);
+  buf += ' ';
+  put_number(buf, xyz[1]);
+  buf += ' ';
+  put_number(buf, xyz[2]);
+  buf += '\n';
+}
+
 // "write failed (why)": errno still holds the failed write's reason (EFBIG, ENOSPC, EIO...).
 inline std::string write_failure() {
   const int err = errno;

@@ -61,12 +61,7 @@ void write_obj(std::ostream& out, const Mesh& mesh) {
   }
   for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
     buf += "v ";
-    put_number(buf, mesh.xyz[3 * i]);
-    buf += ' ';
-    put_number(buf, mesh.xyz[3 * i + 1]);
-    buf += ' ';
-    put_number(buf, mesh.xyz[3 * i + 2]);
-    buf += '\n';
+    bytes::put_xyz_line(buf, &mesh.xyz[3 * i]);
     if (buf.size() > kChunk) flush(out, buf);
   }
   for (const auto& f : mesh.faces) {
@@ -100,17 +95,11 @@ double write_stl(std::ostream& out, const Mesh& mesh, bool ascii) {
     const std::array<double, 3> n = unit_normal(p[0], p[1], p[2]);
     if (ascii) {
       buf += "facet normal ";
-      for (int k = 0; k < 3; ++k) {
-        put_number(buf, n[k]);
-        buf += k < 2 ? ' ' : '\n';
-      }
+      bytes::put_xyz_line(buf, n.data());
       buf += "outer loop\n";
       for (const auto& q : p) {
         buf += "vertex ";
-        for (int k = 0; k < 3; ++k) {
-          put_number(buf, q[k]);
-          buf += k < 2 ? ' ' : '\n';
-        }
+        bytes::put_xyz_line(buf, q.data());
       }
       buf += "endloop\nendfacet\n";
     } else {

@@ -42,12 +42,7 @@ void write_ply(std::ostream& out, const Mesh& mesh, PlyFormat format) {
   constexpr std::size_t kChunk = bytes::kChunk;
   for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
     if (format == PlyFormat::ascii) {
-      put_number(buf, mesh.xyz[3 * i]);
-      buf += ' ';
-      put_number(buf, mesh.xyz[3 * i + 1]);
-      buf += ' ';
-      put_number(buf, mesh.xyz[3 * i + 2]);
-      buf += '\n';
+      bytes::put_xyz_line(buf, &mesh.xyz[3 * i]);
     } else {
       for (int k = 0; k < 3; ++k) put_le(buf, mesh.xyz[3 * i + k]);
     }
@@ -56,12 +51,7 @@ void write_ply(std::ostream& out, const Mesh& mesh, PlyFormat format) {
   for (const auto& f : mesh.faces) {
     if (format == PlyFormat::ascii) {
       buf += "3 ";
-      put_number(buf, f[0]);
-      buf += ' ';
-      put_number(buf, f[1]);
-      buf += ' ';
-      put_number(buf, f[2]);
-      buf += '\n';
+      bytes::put_xyz_line(buf, f.data());
     } else {
       buf += static_cast<char>(3);
       for (int k = 0; k < 3; ++k) put_le(buf, static_cast<std::int32_t>(f[k]));
