@@ -111,22 +111,24 @@ struct NoFoldFilter {
 }  // namespace
 
 TriMesh qslim(const TriMesh& in, std::size_t keep, QslimStats* stats, const Progress& progress) {
+  // note: building the mesh and its quadrics takes seconds on large meshes (tens under
+  // sanitizers), before the first tick: a stop asked for meanwhile is honoured as they go.
+  auto check = [&] {
+    if (progress && !progress(0.0, "simplify")) throw Cancelled();
+  };
   Mesh mesh;
   std::vector<VertexIndex> vi;
   vi.reserve(in.vertex_count());
   for (std::size_t v = 0; v < in.vertex_count(); ++v) {
     vi.push_back(mesh.add_vertex(K::Point_3(in.xyz[3 * v], in.xyz[3 * v + 1], in.xyz[3 * v + 2])));
   }
-  for (const auto& f : in.faces) {
+  for (std::size_t i = 0; i < in.faces.size(); ++i) {
+    const auto& f = in.faces[i];
     if (mesh.add_face(vi[f[0]], vi[f[1]], vi[f[2]]) == Mesh::null_face()) {
       throw std::invalid_argument("qslim: the mesh is not a manifold surface");
     }
+    if (i % 65536 == 65535) check();
   }
-  // note: building the mesh and its quadrics takes seconds on large meshes, before the first
-  // tick: a stop asked for meanwhile is honoured between them.
-  auto check = [&] {
-    if (progress && !progress(0.0, "simplify")) throw Cancelled();
-  };
   check();
   QslimStats local;
   QslimStats& st = stats ? *stats : local;
