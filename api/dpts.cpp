@@ -4,10 +4,10 @@
 #include <cpl_vsi.h>
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
-#include <tbb/info.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -25,6 +25,7 @@
 #include "parallel/memory.hpp"
 #include "parallel/meta.hpp"
 #include "parallel/qem_engine.hpp"
+#include "parallel/simplify.hpp"
 
 namespace dpts {
 namespace {
@@ -44,14 +45,12 @@ class SerialProgress {
   std::mutex m_;
 };
 
-int thread_count(int threads) { return threads > 0 ? threads : tbb::info::default_concurrency(); }
-
 // Runs f in an arena of `threads` workers (0: all cores), GDAL registered; std::invalid_argument
 // (an engine's refusal of an option) becomes UsageError.
 template <typename F>
 auto in_arena(int threads, F&& f) {
   GDALAllRegister();
-  tbb::task_arena arena(thread_count(threads));
+  tbb::task_arena arena(par::thread_count(threads));
   try {
     return arena.execute(std::forward<F>(f));
   } catch (const std::invalid_argument& e) {
@@ -261,7 +260,7 @@ Evaluation evaluate(const std::string& dem, const std::string& mesh, const Evalu
     out.pairs_measured = e->result.pairs_measured;
     const double secs =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    out.json = e->json(request, thread_count(options.threads), secs);
+    out.json = e->json(request, par::thread_count(options.threads), secs);
     return out;
   });
 }

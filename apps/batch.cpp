@@ -186,7 +186,7 @@ int run_batch(const ParOptions& o, const std::string& self, const std::atomic<in
     jobs.push_back(job);
   }
   // Threads and memory shared out: never more than --threads in all.
-  const int threads = thread_count(o.threads);
+  const int threads = par::thread_count(o.threads);
   const int parallel = std::max(1, std::min(o.jobs, threads));
   const int per_job = std::max(1, threads / parallel);
   const std::size_t memory_mb = (memory_limit_bytes(o) >> 20) / parallel;

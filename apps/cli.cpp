@@ -2,7 +2,6 @@
 #include "apps/cli.hpp"
 
 #include <fcntl.h>
-#include <tbb/info.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -30,10 +29,6 @@ const std::string* same_file_in(const std::string& path, const std::vector<std::
     if (same_file(path, f)) return &f;
   }
   return nullptr;
-}
-
-int thread_count(int requested) {
-  return requested > 0 ? requested : tbb::info::default_concurrency();
 }
 
 void reopen_closed_std_streams() {

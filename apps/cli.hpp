@@ -72,9 +72,6 @@ bool same_file(const std::string& a, const std::string& b);
 // there would overwrite the input.
 const std::string* same_file_in(const std::string& path, const std::vector<std::string>& files);
 
-// The threads a run uses: --threads when given (> 0), else every core oneTBB sees.
-int thread_count(int requested);
-
 // Standard streams the caller closed (2>&-) reopened on /dev/null, before any file is opened:
 // otherwise an output file could get descriptor 2 and progress text would land in it.
 void reopen_closed_std_streams();

@@ -418,7 +418,7 @@ int run(const Options& o) {
     return 0;
   }
   const auto start = std::chrono::steady_clock::now();
-  const int threads = dpts::cli::thread_count(o.threads);
+  const int threads = dpts::par::thread_count(o.threads);
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
                                   static_cast<std::size_t>(threads));
   api::EvalRequest request;

@@ -442,7 +442,7 @@ int run(const dpts::cli::ParOptions& o) {
     if (!std::cout) throw IoError("cannot write to standard output");
     return 0;
   }
-  const int threads = cli::thread_count(o.threads);
+  const int threads = par::thread_count(o.threads);
   g_report.threads = threads;
   g_report.clock.enter("open");
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
@@ -550,7 +550,7 @@ int run_rank(int argc, char** argv) {
     const cli::ParOptions o = cli::parse_par(std::vector<std::string>(argv + 1, argv + argc));
     if (!o.help && !o.version && o.batch.empty() && o.algo == par::Algorithm::qem) {
       parallelism.emplace(tbb::global_control::max_allowed_parallelism,
-                          static_cast<std::size_t>(cli::thread_count(o.threads)));
+                          static_cast<std::size_t>(par::thread_count(o.threads)));
       apply_config(o);
       dem.emplace(io::open_dem(o.input, read_options(o)));
       source.emplace(*dem);

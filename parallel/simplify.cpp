@@ -2,6 +2,7 @@
 #include "parallel/simplify.hpp"
 
 #include <tbb/blocked_range.h>
+#include <tbb/info.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -39,6 +40,10 @@ std::optional<Algorithm> parse_algorithm(std::string_view name) {
     if (name == n) return algo;
   }
   return std::nullopt;
+}
+
+int thread_count(int requested) {
+  return requested > 0 ? requested : tbb::info::default_concurrency();
 }
 
 std::size_t target_count(const KeepTarget& target, std::size_t input) {

@@ -32,6 +32,9 @@ inline core::Importance importance_of(Algorithm a) {
                                                          : core::Importance::vp;
 }
 
+// The threads a run uses: `requested` when > 0, else every core oneTBB sees.
+int thread_count(int requested);
+
 // How many vertices to keep: a percentage of the input's surface vertices (P2L) or a count.
 struct KeepTarget {
   std::optional<double> percent;        // in (0, 100]
