@@ -118,14 +118,9 @@ Mesh simplify_dem(const io::DemInfo& dem, const std::string& name, const Simplif
     mo.memory_limit_bytes = par::available_memory_bytes();
     par::MetaStats stats;
     par::MetaResult result = par::simplify_meta(source, mo, report, &stats);
-    const std::vector<double> xy = dem.output_xy(result.tin.cells);
-    out.xyz.resize(3 * result.tin.cells.size());
-    for (std::size_t i = 0; i < result.tin.cells.size(); ++i) {
-      out.xyz[3 * i] = xy[2 * i];
-      out.xyz[3 * i + 1] = xy[2 * i + 1];
-      out.xyz[3 * i + 2] = result.z[i];
-    }
-    out.faces = std::move(result.tin.faces);
+    core::TriMesh mesh = dem.output_mesh(std::move(result.tin), result.z);
+    out.xyz = std::move(mesh.xyz);
+    out.faces = std::move(mesh.faces);
     out.input_vertices = stats.input_vertices;
   }
   // note: as dpts-par, a mesh that would fold over in the output CRS is refused, not returned.

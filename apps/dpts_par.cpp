@@ -179,14 +179,7 @@ void write_mesh(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem, dp
 void write_output(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem, dpts::core::Tin tin,
                   const std::vector<double>& z, dpts::io::AtomicOutputFile& out) {
   dpts::io::Mesh mesh;
-  const std::vector<double> xy = dem.output_xy(tin.cells);
-  mesh.xyz.resize(3 * tin.cells.size());
-  for (std::size_t i = 0; i < tin.cells.size(); ++i) {
-    mesh.xyz[3 * i] = xy[2 * i];
-    mesh.xyz[3 * i + 1] = xy[2 * i + 1];
-    mesh.xyz[3 * i + 2] = z[i];
-  }
-  mesh.faces = std::move(tin.faces);
+  static_cast<dpts::core::TriMesh&>(mesh) = dem.output_mesh(std::move(tin), z);
   write_mesh(o, dem, std::move(mesh), out);
 }
 

@@ -646,18 +646,25 @@ core::HeightGrid WindowReader::read(int col0, int row0, int width, int height,
   return grid;
 }
 
-core::TriMesh Dem::grid_mesh() const {
-  const core::Tin tin = core::grid_tin(grid, core::delaunay_diagonal(frame));
-  if (tin.faces.empty()) throw InputError(path + ": " + kNothingToTriangulate);
+core::TriMesh DemInfo::output_mesh(core::Tin tin, const std::vector<double>& z) const {
   core::TriMesh mesh;
-  const auto xy = output_xy(tin.cells);
+  const std::vector<double> xy = output_xy(tin.cells);
   mesh.xyz.resize(3 * tin.cells.size());
   for (std::size_t i = 0; i < tin.cells.size(); ++i) {
     mesh.xyz[3 * i] = xy[2 * i];
     mesh.xyz[3 * i + 1] = xy[2 * i + 1];
-    mesh.xyz[3 * i + 2] = grid.z[tin.cells[i]];
+    mesh.xyz[3 * i + 2] = z[i];
   }
-  mesh.faces = tin.faces;
+  mesh.faces = std::move(tin.faces);
+  return mesh;
+}
+
+core::TriMesh Dem::grid_mesh() const {
+  core::Tin tin = core::grid_tin(grid, core::delaunay_diagonal(frame));
+  if (tin.faces.empty()) throw InputError(path + ": " + kNothingToTriangulate);
+  std::vector<double> z(tin.cells.size());
+  for (std::size_t i = 0; i < tin.cells.size(); ++i) z[i] = grid.z[tin.cells[i]];
+  core::TriMesh mesh = output_mesh(std::move(tin), z);
   core::fix_orientation(mesh);
   return mesh;
 }

@@ -86,6 +86,10 @@ struct DemInfo {
   // Throws IoError if the CRS transformation fails. Not thread-safe (one transformation).
   std::vector<double> output_xy(const std::vector<std::uint32_t>& cells) const;
 
+  // A TIN over this DEM as a mesh in the output CRS: its cells' centres with heights z (one
+  // per cell), its faces. Throws as output_xy.
+  core::TriMesh output_mesh(core::Tin tin, const std::vector<double>& z) const;
+
   // The same for any grid positions (col, row; cell centres at integers): x0, y0, ...
   std::vector<double> output_xy_of_grid(const std::vector<double>& grid_xy) const;
   // The same, safe to call from concurrent tasks: with a transformation of its own (a copy
