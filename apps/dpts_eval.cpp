@@ -311,9 +311,8 @@ Pictures draw_pictures(const dpts::io::Dem& dem, const dpts::core::PointLocator&
   io::CellRaster heights, mesh;
   heights.width = mesh.width = g.width;
   heights.height = mesh.height = g.height;
-  const auto& m = dem.frame.m;
-  heights.cell_x_m = mesh.cell_x_m = std::hypot(m[0][0], m[1][0]) * dem.frame.metres_per_unit;
-  heights.cell_y_m = mesh.cell_y_m = std::hypot(m[0][1], m[1][1]) * dem.frame.metres_per_unit;
+  heights.cell_x_m = mesh.cell_x_m = dem.frame.col_metres();
+  heights.cell_y_m = mesh.cell_y_m = dem.frame.row_metres();
   heights.values.assign(g.z.size(), none);
   mesh.values.assign(g.z.size(), none);
   tbb::parallel_for(std::size_t{0}, cells.size(), [&](std::size_t i) {

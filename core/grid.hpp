@@ -42,6 +42,9 @@ struct GridFrame {
 
   double u(int col, int row) const { return m[0][0] * col + m[0][1] * row; }
   double w(int col, int row) const { return m[1][0] * col + m[1][1] * row; }
+  // A cell's sides in metres: one column step, one row step.
+  double col_metres() const { return metres_per_unit * std::hypot(m[0][0], m[1][0]); }
+  double row_metres() const { return metres_per_unit * std::hypot(m[0][1], m[1][1]); }
 
   // The inverse map, frame (u, w) -> grid (col, row): col = inv[0] . (u, w), row = inv[1] . (u, w).
   void inverse(double inv[2][2]) const {

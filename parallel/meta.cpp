@@ -279,8 +279,8 @@ std::vector<core::Piece> divide_dem(const core::RasterSource& dem, const KeepTar
   div.halo = halo;
   div.max_vertices = max_vertices;
   const core::GridFrame& f = dem.frame();
-  div.col_metres = f.metres_per_unit * std::hypot(f.m[0][0], f.m[1][0]);
-  div.row_metres = f.metres_per_unit * std::hypot(f.m[0][1], f.m[1][1]);
+  div.col_metres = f.col_metres();
+  div.row_metres = f.row_metres();
   std::vector<core::Piece> pieces = core::kd_divide(bc, div);
   std::size_t total = 0;
   for (const auto& p : pieces) total += p.vertices;
