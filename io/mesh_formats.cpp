@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <memory>
 #include <ostream>
+#include <utility>
 
 #include "core/errors.hpp"
 #include "io/atomic_output_file.hpp"
@@ -181,12 +182,19 @@ void write_gpkg(const std::filesystem::path& path, const Mesh& mesh,
 
 }  // namespace
 
+namespace {
+// Each format with its --format name, which is also its extension after the dot.
+constexpr std::pair<MeshFormat, const char*> kFormats[] = {{MeshFormat::ply, ".ply"},
+                                                           {MeshFormat::obj, ".obj"},
+                                                           {MeshFormat::stl, ".stl"},
+                                                           {MeshFormat::gpkg, ".gpkg"}};
+}  // namespace
+
 std::optional<MeshFormat> parse_mesh_format(std::string_view text) {
   const std::string t = lower(text);
-  if (t == "ply") return MeshFormat::ply;
-  if (t == "obj") return MeshFormat::obj;
-  if (t == "stl") return MeshFormat::stl;
-  if (t == "gpkg") return MeshFormat::gpkg;
+  for (const auto& [format, ext] : kFormats) {
+    if (t == ext + 1) return format;
+  }
   return std::nullopt;
 }
 
@@ -199,31 +207,10 @@ MeshFormat mesh_format_of(const std::string& path) {
 }
 
 const char* extension_of(MeshFormat format) {
-  switch (format) {
-    case MeshFormat::obj:
-      return ".obj";
-    case MeshFormat::stl:
-      return ".stl";
-    case MeshFormat::gpkg:
-      return ".gpkg";
-    case MeshFormat::ply:
-      break;
+  for (const auto& [f, ext] : kFormats) {
+    if (f == format) return ext;
   }
   return ".ply";
-}
-
-const char* name_of(MeshFormat format) {
-  switch (format) {
-    case MeshFormat::obj:
-      return "OBJ";
-    case MeshFormat::stl:
-      return "STL";
-    case MeshFormat::gpkg:
-      return "GeoPackage";
-    case MeshFormat::ply:
-      break;
-  }
-  return "PLY";
 }
 
 double write_mesh(AtomicOutputFile& out, const Mesh& mesh, const MeshWriteOptions& options) {

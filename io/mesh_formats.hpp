@@ -20,7 +20,6 @@ std::optional<MeshFormat> parse_mesh_format(std::string_view text);
 MeshFormat mesh_format_of(const std::string& path);
 // ".ply", ".obj", ".stl", ".gpkg".
 const char* extension_of(MeshFormat format);
-const char* name_of(MeshFormat format);
 
 struct MeshWriteOptions {
   MeshFormat format = MeshFormat::ply;
