@@ -194,9 +194,10 @@ Mesh simplify(const double* heights, int width, int height,
   }
   GDALAllRegister();
   // The grid as a GeoTIFF in GDAL's memory file system, read like any file.
+  // note: named by a counter, not by the array: two calls on one array may run at once.
+  static std::atomic<unsigned long> calls{0};
   char name[80];
-  std::snprintf(name, sizeof name, "/vsimem/dpts-heights-%p.tif",
-                static_cast<const void*>(heights));
+  std::snprintf(name, sizeof name, "/vsimem/dpts-heights-%lu.tif", calls.fetch_add(1));
   struct Unlink {
     const char* path;
     ~Unlink() { VSIUnlink(path); }
