@@ -67,11 +67,10 @@ auto without_gil(PyProgress& progress, F&& f) {
   }
 }
 
-// A read-only numpy view of a vector's data, kept alive by `owner`.
+// A read-only (rows, 3) numpy view of the values at `data`, kept alive by `owner`.
 template <typename T>
-py::array view(const std::vector<T>& data, std::size_t rows, py::handle owner) {
-  py::array a(py::dtype::of<T>(), {rows, std::size_t{3}}, {3 * sizeof(T), sizeof(T)}, data.data(),
-              owner);
+py::array view(const T* data, std::size_t rows, py::handle owner) {
+  py::array a(py::dtype::of<T>(), {rows, std::size_t{3}}, {3 * sizeof(T), sizeof(T)}, data, owner);
   py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
   return a;
 }
@@ -107,7 +106,7 @@ PYBIND11_MODULE(dpts, m) {
           "vertices",
           [](py::object self) {
             const auto& mesh = self.cast<const dpts::Mesh&>();
-            return view(mesh.xyz, mesh.vertex_count(), self);
+            return view(mesh.xyz.data(), mesh.vertex_count(), self);
           },
           "(n, 3) float64, read-only (copy() to change)")
       .def_property_readonly(
@@ -115,11 +114,8 @@ PYBIND11_MODULE(dpts, m) {
           [](py::object self) {
             const auto& mesh = self.cast<const dpts::Mesh&>();
             static_assert(sizeof(std::array<std::uint32_t, 3>) == 3 * sizeof(std::uint32_t));
-            const auto* first = mesh.faces.empty() ? nullptr : mesh.faces.front().data();
-            py::array a(py::dtype::of<std::uint32_t>(), {mesh.faces.size(), std::size_t{3}},
-                        {3 * sizeof(std::uint32_t), sizeof(std::uint32_t)}, first, self);
-            py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
-            return a;
+            const std::uint32_t* first = mesh.faces.empty() ? nullptr : mesh.faces.front().data();
+            return view(first, mesh.faces.size(), self);
           },
           "(m, 3) uint32 vertex indices, counter-clockwise seen from above, read-only")
       .def_readonly("crs", &dpts::Mesh::crs_wkt, "the CRS as WKT ('' when none)")
