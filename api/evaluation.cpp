@@ -7,7 +7,7 @@
 
 #include "core/errors.hpp"
 #include "io/json.hpp"
-#include "io/ply.hpp"
+#include "io/mesh_formats.hpp"
 #include "io/sample_points.hpp"
 #include "parallel/memory.hpp"
 
@@ -38,7 +38,7 @@ std::unique_ptr<Evaluation> load(const EvalRequest& request,
   e->t = dem.grid_mesh();
   const core::TriMesh& t = e->t;
   // T': the mesh.
-  io::Mesh ply = io::read_ply_file(request.mesh);
+  io::Mesh ply = io::read_mesh_file(request.mesh);
   io::check_triangles(ply, request.mesh);
   // A mesh of this DEM lies on its footprint; one far outside it is another DEM's, or in
   // another CRS (and its Steiner graph could be unboundedly large).

@@ -30,7 +30,6 @@
 #include "io/dem_reader.hpp"
 #include "io/json.hpp"
 #include "io/pictures.hpp"
-#include "io/ply.hpp"
 #include "io/sample_points.hpp"
 #include "parallel/evaluate.hpp"
 #include "parallel/memory.hpp"
@@ -60,7 +59,7 @@ struct Options {
   bool json = false, quiet = false, help = false, version = false;
 };
 
-const char* kHelp = R"(usage: dpts-eval --dem DEM --mesh MESH.ply [options]
+const char* kHelp = R"(usage: dpts-eval --dem DEM --mesh MESH [options]
 
 Measures how well a TIN preserves the surface (geodesic) distances of the DEM it was made
 from (the DPTS paper): for K random points uniform in the DEM's valid footprint, the error
@@ -76,8 +75,10 @@ the DEM (orientation, coverage, faces over no-data) and its vertical error at ev
 cell centre.
 
   --dem DEM          the original DEM (any raster GDAL reads; band 1)
-  --mesh MESH.ply    the TIN: any PLY with vertex x, y, z and triangle faces, in the same
-                     CRS as dpts-par writes for DEM (see --t-srs)
+  --mesh MESH        the TIN, in the same CRS as dpts-par writes for DEM (see --t-srs): a
+                     PLY with vertex x, y, z and triangle faces, an OBJ of triangles, an STL
+                     (binary or ASCII), or a GeoPackage of one layer of triangles (Polygon Z,
+                     Triangle Z, MultiPolygon Z, TIN Z)
   --points K         points per set (default 100)
   --sets S           independent sets (default 3)
   --seed N           seed of the sample points (default 1)
@@ -121,8 +122,8 @@ cell centre.
   --json             print one JSON object with all figures as the last line
   --quiet            only the JSON line (or nothing but errors)
   --help, --version
-A mesh given as a triangle soup (each face with its own corners) is welded first: vertices at
-identical x, y, z are merged (reported). The run fails (exit 1, one line) when sample points
+A mesh given as a triangle soup (each face with its own corners, as STL and GeoPackage hold
+it) is welded first: vertices at identical x, y, z are merged (reported). The run fails (exit 1, one line) when sample points
 lie outside the mesh (or, given, outside the DEM), when pairs connected on T are not on the
 mesh (a mesh in parts or slit: their count), or when an output cannot be written. Pairs not
 connected on T (islands of valid cells) cannot be measured: they are left out and counted.
@@ -186,7 +187,7 @@ Options parse(const std::vector<std::string>& args) {
     }
   }
   if (!o.help && !o.version && (o.dem.empty() || o.mesh.empty())) {
-    throw UsageError("expected --dem DEM and --mesh MESH.ply");
+    throw UsageError("expected --dem DEM and --mesh MESH");
   }
   auto has = [&](const char* flag) {
     return std::find(given.begin(), given.end(), flag) != given.end();

@@ -1,4 +1,5 @@
-// Mesh outputs by format: PLY, Wavefront OBJ, STL and GeoPackage (one layer of triangles).
+// Meshes by format: PLY, Wavefront OBJ, STL and GeoPackage (one layer of triangles), written
+// and read.
 #pragma once
 
 #include <optional>
@@ -39,5 +40,12 @@ struct MeshWriteOptions {
 // caller warns when that is more than the data can bear. Throws IoError naming nothing (the
 // caller names the file) when writing fails; UsageError for a stream given GeoPackage.
 double write_mesh(AtomicOutputFile& out, const Mesh& mesh, const MeshWriteOptions& options);
+
+// Reads a triangle mesh in any of the formats (io/mesh_read.cpp): PLY or GeoPackage known by
+// their first bytes, else by the extension (.obj, .stl binary or ASCII, .gpkg; PLY for any
+// other). OBJ faces must be triangles; STL and GeoPackage give a triangle soup (three vertices
+// of its own per face, STL's binary ones float32): weld it where faces must share vertices.
+// Throws InputError naming the file on malformed input.
+Mesh read_mesh_file(const std::string& path);
 
 }  // namespace dpts::io

@@ -177,7 +177,8 @@ PYBIND11_MODULE(dpts, m) {
 source: a path GDAL reads, or a 2-D array of heights (rows from the top) with geotransform
   (GDAL's six numbers), crs (WKT, 'EPSG:n', PROJ; '' none) and nodata.
 keep: the fraction of the cells kept (default 0.1), or vertices=N.
-algo: 'qem' (default), 'vp-meta' or 'pld-meta'.
+algo: 'qem' (default), 'vp-meta' or 'pld-meta' (out of core); 'vp', 'pld' or 'qslim'
+  (the whole DEM in memory).
 progress: called as progress(fraction, stage); return False to stop (dpts.Cancelled).)");
 
   m.def(

@@ -27,14 +27,16 @@ namespace dpts {
 using ProgressFn = std::function<bool(double fraction, std::string_view stage)>;
 
 struct SimplifyOptions {
-  std::string algo = "qem";  // qem (default), vp-meta or pld-meta: the out-of-core engines
+  // qem (default), vp-meta or pld-meta: the out-of-core piece engines; vp, pld (the paper's
+  // elimination) or qslim (Garland-Heckbert): the whole DEM in memory
+  std::string algo = "qem";
   double keep = 0.1;         // the fraction of the valid cells kept, 0 < keep <= 1...
   std::size_t vertices = 0;  // ...or this many vertices (>= 3) when not 0
   double max_error = 0;      // qem: vertical error bound in output CRS units (0: none)
   int levels = 4;            // at least 2^levels pieces
   int tile_mb = 256;         // memory budget of one piece
   int value_points = 20;     // vp-meta, pld-meta: random points per piece value
-  std::uint64_t seed = 1;    // vp-meta, pld-meta
+  std::uint64_t seed = 1;    // vp, pld, vp-meta, pld-meta (Monte Carlo volumes, piece values)
   int threads = 0;           // 0: all cores
   std::string t_srs;         // output CRS; empty: the DEM's if projected, else its UTM zone
   int band = 1;              // the band holding the heights

@@ -27,6 +27,15 @@ def hills(n=600):
     return z, (400000.0, 10.0, 0.0, 3800000.0, 0.0, -10.0)
 
 
+@pytest.mark.parametrize("algo", ["vp", "pld", "vp-meta", "pld-meta", "qslim"])
+def test_every_method_gives_dpts_par_mesh(tmp_path, algo):
+    m = dpts.simplify(SAMPLE, keep=0.1, algo=algo)
+    out, par = tmp_path / "py.ply", tmp_path / "par.ply"
+    m.write(str(out))
+    subprocess.run([DPTS_PAR, "--quiet", "--algo", algo, SAMPLE, str(par)], check=True)
+    assert ply_body(out) == ply_body(par)
+
+
 def test_simplify_a_file_gives_dpts_par_mesh(tmp_path):
     m = dpts.simplify(SAMPLE, keep=0.1)
     assert m.vertices.shape == (1232, 3) and m.vertices.dtype == np.float64
@@ -79,6 +88,13 @@ def test_evaluate_returns_dpts_eval_figures(tmp_path):
     assert r["pairs_measured"] == 2 * 12 * 11 // 2
     assert r["mesh_vertices"] == 1232 and r["faces_over_nodata"] == 0
     assert r["vertical_rmse"] > 0 and r["geodesics"] == "straightened"
+    # The same mesh in the other formats measures the same (STL and GeoPackage welded).
+    m = dpts.simplify(SAMPLE)
+    for name, ascii in (("m.obj", False), ("m.stl", True), ("m.gpkg", False)):
+        m.write(str(tmp_path / name), ascii=ascii)
+        other = dpts.evaluate(SAMPLE, str(tmp_path / name), points=12, sets=2)
+        assert other["distance_error"] == pytest.approx(r["distance_error"], rel=1e-9), name
+        assert other["mesh_vertices"] == 1232 and other["mesh_faces"] == r["mesh_faces"], name
 
 
 def test_errors_name_the_file_or_option(tmp_path):

@@ -536,3 +536,74 @@ TEST_CASE("dpts-eval welds a triangle soup and measures it as the indexed mesh",
   CHECK(b.out.find("welded           " + std::to_string(merged) + " vertices") !=
         std::string::npos);
 }
+
+TEST_CASE("dpts-eval reads the mesh as OBJ, STL and GeoPackage and measures it as the PLY",
+          "[cli][eval][formats]") {
+  Fixture fx;
+  const auto ply = simplified_mesh(fx);
+  const std::vector<std::string> common = {"--dem",  fx.dem, "--points", "12",
+                                           "--sets", "2",    "--json",   "--quiet"};
+  auto measure = [&](const std::string& m) {
+    std::vector<std::string> args = common;
+    args.insert(args.end(), {"--mesh", m});
+    return test::run(kEval, args);
+  };
+  const auto base = measure(ply);
+  REQUIRE(base.exit_code == 0);
+  const std::string jb = last_line(base.out);
+  const std::vector<std::vector<std::string>> outputs = {
+      {"m.obj"}, {"m.stl", "--ascii"}, {"m.gpkg"}, {"m_bin.stl"}};
+  for (const auto& o : outputs) {
+    INFO(o[0]);
+    const auto path = (fx.dir / o[0]).string();
+    std::vector<std::string> args = {"--quiet", "--keep", "30%", fx.dem, path};
+    args.insert(args.end(), o.begin() + 1, o.end());
+    REQUIRE(test::run(kPar, args).exit_code == 0);
+    const auto r = measure(path);
+    REQUIRE(r.exit_code == 0);
+    const std::string j = last_line(r.out);
+    CHECK(io::json_field(j, "mesh_vertices") == io::json_field(jb, "mesh_vertices"));
+    CHECK(io::json_field(j, "mesh_faces") == io::json_field(jb, "mesh_faces"));
+    CHECK(io::json_field(j, "bad_edges") == "0");
+    const double e = std::stod(io::json_field(j, "distance_error").value_or("-1"));
+    const double e0 = std::stod(io::json_field(jb, "distance_error").value_or("-2"));
+    // note: binary STL holds float32: at these northings (3.8e6 m) corners move by up to
+    // 0.125 m on 10 m cells, which moves the figure by about 1 %.
+    CHECK(e == Approx(e0).epsilon(o[0] == "m_bin.stl" ? 0.05 : 1e-12));
+  }
+}
+
+TEST_CASE("dpts-eval answers each malformed OBJ, STL and GeoPackage in one line",
+          "[cli][eval][formats][robust]") {
+  Fixture fx;
+  const std::string v =
+      "v 400005 3799995 300\nv 400235 3799995 300\nv 400235 3799825 300\n"
+      "v 400005 3799825 300\n";
+  struct Case {
+    std::string name, text, message;
+  };
+  const std::vector<Case> cases = {
+      {"quad.obj", v + "f 1 4 3 2\n", "line 5: a face of 4 corners; expected triangles"},
+      {"index.obj", v + "f 1 2 9\n", "line 5: face corner 9: no such vertex"},
+      {"word.obj", v + "f 1 2 x\n", "line 5: face corner x: expected a vertex number"},
+      {"short.obj", "v 400005 3799995\n", "line 1: expected a vertex's x y z"},
+      {"nofaces.obj", v, "has no faces"},
+      {"two.stl",
+       "solid t\nfacet normal 0 0 1\nouter loop\nvertex 400005 3799995 300\n"
+       "vertex 400235 3799995 300\nendloop\nendfacet\nendsolid t\n",
+       "ASCII STL, facet 0: expected three vertices"},
+      {"open.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 400005 3799995 300\n",
+       "ASCII STL, facet 0: the file ends inside it"},
+      {"junk.stl", "not an stl at all\n",
+       "neither binary STL (84 + 50 bytes per facet) nor ASCII STL"},
+      {"junk.gpkg", "not a geopackage\n", "cannot open as a vector dataset"},
+  };
+  for (const auto& c : cases) {
+    INFO(c.name);
+    const auto mesh = (fx.dir / c.name).string();
+    std::ofstream(mesh, std::ios::trunc) << c.text;
+    const auto r = test::run(kEval, {"--quiet", "--dem", fx.dem, "--mesh", mesh});
+    CHECK(r.exit_code == 1);
+    CHECK(r.err == "dpts-eval: error: " + mesh + ": " + c.message + "\n");
+  }
+}
