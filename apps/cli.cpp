@@ -145,136 +145,134 @@ std::string ArgReader::value() {
   return args_[++i_];
 }
 
-ParOptions parse_par(const std::vector<std::string>& args) {
-  ParOptions o;
-  std::vector<std::string> positional;
-  bool keep_seen = false, vertices_seen = false;
-  ArgReader in(args);
-  while (in.next()) {
-    const std::string arg = in.arg();
-    if (!in.is_flag()) {
-      positional.push_back(arg);
-      continue;
+namespace {
+
+// Which of --keep and --vertices were given (one, not both; neither: 10 %).
+struct KeepSeen {
+  bool keep = false, vertices = false;
+};
+
+// The method's flags (--algo, its options, what to keep): false if arg is none of them.
+bool read_method_flag(const std::string& arg, ArgReader& in, ParOptions& o, KeepSeen& seen) {
+  if (arg == "--algo") {
+    const std::string v = in.value();
+    const auto algo = par::parse_algorithm(v);
+    if (!algo) {
+      throw UsageError("--algo " + v + ": expected vp, pld, vp-meta, pld-meta, qslim or qem");
     }
-    auto need = [&](const std::string&) { return in.value(); };
-    if (arg == "--help" || arg == "-h") {
-      o.help = true;
-    } else if (arg == "--version") {
-      o.version = true;
-    } else if (arg == "--algo") {
-      const std::string v = need(arg);
-      const auto algo = par::parse_algorithm(v);
-      if (!algo) {
-        throw UsageError("--algo " + v + ": expected vp, pld, vp-meta, pld-meta, qslim or qem");
-      }
-      o.algo = *algo;
-      o.elimination.importance = par::importance_of(o.algo);
-      o.algo_text = v;
-    } else if (arg == "--levels") {
-      o.levels = parse_number<int>(arg, need(arg), 0, "an integer from 0 to 16");
-      if (o.levels > 16)
-        throw UsageError("--levels " + std::to_string(o.levels) +
-                         ": expected an integer from 0 to 16");
-    } else if (arg == "--value-points") {
-      o.value_points = parse_number<int>(arg, need(arg), 2, "an integer >= 2");
-    } else if (arg == "--verbose" || arg == "-v") {
-      o.verbose = true;
-    } else if (arg == "--keep") {
-      std::string v = need(arg);
-      o.keep_text = v;
-      if (!v.empty() && v.back() == '%') v.pop_back();
-      double p = 0;
-      const auto res = std::from_chars(v.data(), v.data() + v.size(), p);
-      if (v.empty() || res.ec != std::errc() || res.ptr != v.data() + v.size() || !(p > 0) ||
-          p > 100) {
-        throw UsageError("--keep " + o.keep_text + ": expected a percentage with 0 < P <= 100");
-      }
-      o.keep.percent = p;
-      keep_seen = true;
-    } else if (arg == "--max-error") {
-      const std::string v = need(arg);
-      double m = 0;
-      const auto res = std::from_chars(v.data(), v.data() + v.size(), m);
-      if (v.empty() || res.ec != std::errc() || res.ptr != v.data() + v.size() || !(m > 0) ||
-          !std::isfinite(m)) {
-        throw UsageError("--max-error " + v +
-                         ": expected a positive number (units of the output CRS)");
-      }
-      o.max_error = m;
-      o.max_error_text = v;
-    } else if (arg == "--vertices") {
-      const std::string v = need(arg);
-      o.keep.vertices = parse_number<std::size_t>(arg, v, 3, "an integer >= 3");
-      o.keep_text = v + " vertices";
-      vertices_seen = true;
-    } else if (arg == "--vp-volume") {
-      const std::string v = need(arg);
-      if (v == "exact") {
-        o.elimination.vp_volume = core::VolumeMethod::exact;
-      } else if (v == "mc") {
-        o.elimination.vp_volume = core::VolumeMethod::monte_carlo;
-      } else {
-        throw UsageError("--vp-volume " + v + ": expected exact or mc");
-      }
-    } else if (arg == "--vp-samples") {
-      o.elimination.vp_samples = parse_number<int>(arg, need(arg), 1, "an integer >= 1");
-    } else if (arg == "--seed") {
-      o.elimination.seed = parse_number<std::uint64_t>(arg, need(arg), 0, "a non-negative integer");
-    } else if (arg == "--threads") {
-      o.threads = parse_number<int>(arg, need(arg), 1, "an integer >= 1");
-    } else if (arg == "--tile-mb") {
-      o.tile_mb = parse_number<int>(arg, need(arg), 1, "an integer >= 1");
-    } else if (arg == "--t-srs") {
-      o.t_srs = need(arg);
-      if (o.t_srs.empty()) throw UsageError("--t-srs: expected a CRS");
-    } else if (arg == "--band") {
-      o.band = parse_number<int>(arg, need(arg), 1, "an integer >= 1");
-    } else if (arg == "--max-memory") {
-      o.max_memory_mb = parse_number<std::size_t>(arg, need(arg), 1, "an integer >= 1 (MB)");
-    } else if (arg == "--report") {
-      o.report = need(arg);
-      if (o.report.empty()) throw UsageError("--report: expected a file name");
-    } else if (arg == "--batch") {
-      o.batch = need(arg);
-      if (o.batch.empty()) throw UsageError("--batch: expected a folder or a list file");
-    } else if (arg == "--out-dir") {
-      o.out_dir = need(arg);
-      if (o.out_dir.empty()) throw UsageError("--out-dir: expected a folder");
-    } else if (arg == "--jobs") {
-      o.jobs = parse_number<int>(arg, need(arg), 1, "an integer >= 1");
-    } else if (arg == "--ascii") {
-      o.ascii = true;
-    } else if (arg == "--format") {
-      const std::string text = need(arg);
-      o.format_flag = io::parse_mesh_format(text);
-      if (!o.format_flag) throw UsageError("--format " + text + ": expected ply, obj, stl or gpkg");
-    } else if (arg == "--quiet" || arg == "-q") {
-      o.quiet = true;
-    } else if (arg == "--config") {
-      std::string key, value;
-      try {
-        key = in.value();
-        value = in.value();
-      } catch (const UsageError&) {
-        throw UsageError("--config: expected KEY VALUE");
-      }
-      o.config.emplace_back(key, value);
+    o.algo = *algo;
+    o.elimination.importance = par::importance_of(o.algo);
+    o.algo_text = v;
+  } else if (arg == "--levels") {
+    o.levels = parse_number<int>(arg, in.value(), 0, "an integer from 0 to 16");
+    if (o.levels > 16)
+      throw UsageError("--levels " + std::to_string(o.levels) +
+                       ": expected an integer from 0 to 16");
+  } else if (arg == "--value-points") {
+    o.value_points = parse_number<int>(arg, in.value(), 2, "an integer >= 2");
+  } else if (arg == "--verbose" || arg == "-v") {
+    o.verbose = true;
+  } else if (arg == "--keep") {
+    std::string v = in.value();
+    o.keep_text = v;
+    if (!v.empty() && v.back() == '%') v.pop_back();
+    double p = 0;
+    const auto res = std::from_chars(v.data(), v.data() + v.size(), p);
+    if (v.empty() || res.ec != std::errc() || res.ptr != v.data() + v.size() || !(p > 0) ||
+        p > 100) {
+      throw UsageError("--keep " + o.keep_text + ": expected a percentage with 0 < P <= 100");
+    }
+    o.keep.percent = p;
+    seen.keep = true;
+  } else if (arg == "--max-error") {
+    const std::string v = in.value();
+    double m = 0;
+    const auto res = std::from_chars(v.data(), v.data() + v.size(), m);
+    if (v.empty() || res.ec != std::errc() || res.ptr != v.data() + v.size() || !(m > 0) ||
+        !std::isfinite(m)) {
+      throw UsageError("--max-error " + v +
+                       ": expected a positive number (units of the output CRS)");
+    }
+    o.max_error = m;
+    o.max_error_text = v;
+  } else if (arg == "--vertices") {
+    const std::string v = in.value();
+    o.keep.vertices = parse_number<std::size_t>(arg, v, 3, "an integer >= 3");
+    o.keep_text = v + " vertices";
+    seen.vertices = true;
+  } else if (arg == "--vp-volume") {
+    const std::string v = in.value();
+    if (v == "exact") {
+      o.elimination.vp_volume = core::VolumeMethod::exact;
+    } else if (v == "mc") {
+      o.elimination.vp_volume = core::VolumeMethod::monte_carlo;
     } else {
-      throw UsageError(arg + ": unknown option");
+      throw UsageError("--vp-volume " + v + ": expected exact or mc");
     }
-    static const char* batch_only[] = {"--batch", "--out-dir", "--jobs", "--threads",
-                                       "--max-memory", "--report", "--quiet", "-q"};
-    if (std::find(std::begin(batch_only), std::end(batch_only), arg) == std::end(batch_only)) {
-      const std::vector<std::string> taken = in.taken();
-      o.child_args.insert(o.child_args.end(), taken.begin(), taken.end());
-    }
+  } else if (arg == "--vp-samples") {
+    o.elimination.vp_samples = parse_number<int>(arg, in.value(), 1, "an integer >= 1");
+  } else if (arg == "--seed") {
+    o.elimination.seed = parse_number<std::uint64_t>(arg, in.value(), 0, "a non-negative integer");
+  } else {
+    return false;
   }
-  if (o.help || o.version) return o;
-  if (keep_seen && vertices_seen) throw UsageError("--keep and --vertices: give one, not both");
+  return true;
+}
+
+// The run's flags (threads, memory, input, output, batch, GDAL): false if arg is none of them.
+bool read_run_flag(const std::string& arg, ArgReader& in, ParOptions& o) {
+  if (arg == "--threads") {
+    o.threads = parse_number<int>(arg, in.value(), 1, "an integer >= 1");
+  } else if (arg == "--tile-mb") {
+    o.tile_mb = parse_number<int>(arg, in.value(), 1, "an integer >= 1");
+  } else if (arg == "--t-srs") {
+    o.t_srs = in.value();
+    if (o.t_srs.empty()) throw UsageError("--t-srs: expected a CRS");
+  } else if (arg == "--band") {
+    o.band = parse_number<int>(arg, in.value(), 1, "an integer >= 1");
+  } else if (arg == "--max-memory") {
+    o.max_memory_mb = parse_number<std::size_t>(arg, in.value(), 1, "an integer >= 1 (MB)");
+  } else if (arg == "--report") {
+    o.report = in.value();
+    if (o.report.empty()) throw UsageError("--report: expected a file name");
+  } else if (arg == "--batch") {
+    o.batch = in.value();
+    if (o.batch.empty()) throw UsageError("--batch: expected a folder or a list file");
+  } else if (arg == "--out-dir") {
+    o.out_dir = in.value();
+    if (o.out_dir.empty()) throw UsageError("--out-dir: expected a folder");
+  } else if (arg == "--jobs") {
+    o.jobs = parse_number<int>(arg, in.value(), 1, "an integer >= 1");
+  } else if (arg == "--ascii") {
+    o.ascii = true;
+  } else if (arg == "--format") {
+    const std::string text = in.value();
+    o.format_flag = io::parse_mesh_format(text);
+    if (!o.format_flag) throw UsageError("--format " + text + ": expected ply, obj, stl or gpkg");
+  } else if (arg == "--quiet" || arg == "-q") {
+    o.quiet = true;
+  } else if (arg == "--config") {
+    std::string key, value;
+    try {
+      key = in.value();
+      value = in.value();
+    } catch (const UsageError&) {
+      throw UsageError("--config: expected KEY VALUE");
+    }
+    o.config.emplace_back(key, value);
+  } else {
+    return false;
+  }
+  return true;
+}
+
+// The checks across flags and the positional arguments, once all are read.
+void check_par(ParOptions& o, const std::vector<std::string>& positional, const KeepSeen& seen) {
+  if (seen.keep && seen.vertices) throw UsageError("--keep and --vertices: give one, not both");
   if (o.max_error && o.algo != par::Algorithm::qem) {
     throw UsageError("--max-error: only with --algo qem");
   }
-  if (!keep_seen && !vertices_seen) {
+  if (!seen.keep && !seen.vertices) {
     if (o.max_error) {
       // The error bound alone: as few vertices as it allows.
       o.keep.vertices = 3;
@@ -291,8 +289,9 @@ ParOptions parse_par(const std::vector<std::string>& args) {
     if (o.batch.empty()) throw UsageError("--out-dir: needs --batch");
     if (o.out_dir.empty()) throw UsageError("--batch: needs --out-dir");
     if (!o.report.empty()) throw UsageError("--report: a batch writes one report per input");
-    if (!positional.empty()) throw UsageError("unexpected argument '" + positional[0] + "' with --batch");
-    return o;
+    if (!positional.empty())
+      throw UsageError("unexpected argument '" + positional[0] + "' with --batch");
+    return;
   }
   if (o.jobs != 1) throw UsageError("--jobs: needs --batch");
   if (positional.size() != 2) {
@@ -319,6 +318,37 @@ ParOptions parse_par(const std::vector<std::string>& args) {
                      (same_file(o.report, o.input) ? "INPUT" : "OUTPUT") +
                      " file; refusing to overwrite it");
   }
+}
+
+}  // namespace
+
+ParOptions parse_par(const std::vector<std::string>& args) {
+  ParOptions o;
+  std::vector<std::string> positional;
+  KeepSeen seen;
+  ArgReader in(args);
+  while (in.next()) {
+    const std::string arg = in.arg();
+    if (!in.is_flag()) {
+      positional.push_back(arg);
+      continue;
+    }
+    if (arg == "--help" || arg == "-h") {
+      o.help = true;
+    } else if (arg == "--version") {
+      o.version = true;
+    } else if (!read_method_flag(arg, in, o, seen) && !read_run_flag(arg, in, o)) {
+      throw UsageError(arg + ": unknown option");
+    }
+    static const char* batch_only[] = {"--batch",      "--out-dir", "--jobs",  "--threads",
+                                       "--max-memory", "--report",  "--quiet", "-q"};
+    if (std::find(std::begin(batch_only), std::end(batch_only), arg) == std::end(batch_only)) {
+      const std::vector<std::string> taken = in.taken();
+      o.child_args.insert(o.child_args.end(), taken.begin(), taken.end());
+    }
+  }
+  if (o.help || o.version) return o;
+  check_par(o, positional, seen);
   return o;
 }
 

@@ -336,22 +336,23 @@ void DemInfo::check_unchanged() const {
   }
 }
 
-DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
-  DemInfo dem;
-  dem.path = path;
-  dem.stamp = DemInfo::stamp_of(path);
+namespace {
+
+// A path that names a plain file must exist and be one: not a directory, and not a FIFO or
+// device, whose open would block or whose read would not end. GDAL's /vsimem/, /vsizip/... and
+// names with a driver prefix (subdatasets and connection strings: GTIFF_DIR:1:f.tif,
+// NETCDF:"f.nc":var, HDF5:...) are not plain files and are left to GDAL.
+void check_plain_file(const std::string& path) {
   std::error_code ec;
-  // GDAL's /vsimem/, /vsizip/... and names with a driver prefix (subdatasets and connection
-  // strings: GTIFF_DIR:1:f.tif, NETCDF:"f.nc":var, HDF5:...) are not plain files.
   const std::size_t colon = path.find(':');
   const bool prefixed = colon != std::string::npos && colon > 1 &&
                         std::all_of(path.begin(), path.begin() + static_cast<long>(colon),
                                     [](unsigned char c) { return std::isalnum(c) || c == '_'; });
   const bool virtual_file = path.rfind("/vsi", 0) == 0 || prefixed;
-  if (!virtual_file && !std::filesystem::exists(path, ec)) throw InputError(path + ": no such file");
+  if (!virtual_file && !std::filesystem::exists(path, ec))
+    throw InputError(path + ": no such file");
   if (!virtual_file && std::filesystem::is_directory(path, ec))
     throw InputError(path + ": is a directory, not a raster");
-  // A FIFO with no writer would block the open forever, a device read without end.
   const std::filesystem::file_status st = std::filesystem::status(path, ec);
   if (!virtual_file && !std::filesystem::is_regular_file(st)) {
     throw InputError(
@@ -359,37 +360,16 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
         ": is a pipe or a device, not a raster file (a raster on standard input: \"-\" as "
         "dpts-par's INPUT, or /vsistdin/)");
   }
+}
 
-  CPLErrorReset();
-  std::unique_ptr<GDALDataset, DatasetCloser> ds(
-      GDALDataset::Open(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY | GDAL_OF_VERBOSE_ERROR));
-  if (!ds) {
-    const std::string why = CPLGetLastErrorMsg();
-    throw InputError(path + ": not a raster GDAL can read" +
-                     (why.empty() ? std::string() : " (" + last_gdal_error() + ")"));
-  }
-  if (ds->GetRasterCount() < 1) throw InputError(path + ": has no raster band");
-  if (options.band < 1 || options.band > ds->GetRasterCount()) {
-    throw InputError(path + ": has " + std::to_string(ds->GetRasterCount()) + " band" +
-                     (ds->GetRasterCount() == 1 ? "" : "s") + "; there is no band " +
-                     std::to_string(options.band));
-  }
-  const int width = ds->GetRasterXSize(), height = ds->GetRasterYSize();
-  check_raw_size(*ds, path);
-  dem.files = dataset_files(*ds, path);
-  if (width < 2 || height < 2) {
-    throw InputError(path + ": " + std::to_string(width) + " x " + std::to_string(height) +
-                     " cells; at least 2 x 2 are needed");
-  }
-  if (ds->GetRasterCount() > 1) {
-    dem.notes.push_back(path + ": " + std::to_string(ds->GetRasterCount()) + " bands; using band " +
-                        std::to_string(options.band) +
-                        (options.band == 1 ? " (--band picks another)" : ""));
-  }
+// The dataset's geotransform into dem (1 m cells, noted, when it has none), refused when it is
+// not finite, has zero cell size, or cells too small for doubles to place apart.
+void read_geotransform(GDALDataset& ds, const std::string& path, int width, int height,
+                       DemInfo& dem) {
   double* gt = dem.geotransform;
-  const bool has_gt = ds->GetGeoTransform(gt) == CE_None;
-  if (!has_gt && ds->GetGCPCount() > 0) {
-    throw InputError(path + ": georeferenced by " + std::to_string(ds->GetGCPCount()) +
+  const bool has_gt = ds.GetGeoTransform(gt) == CE_None;
+  if (!has_gt && ds.GetGCPCount() > 0) {
+    throw InputError(path + ": georeferenced by " + std::to_string(ds.GetGCPCount()) +
                      " ground control points, not a geotransform; warp it to a grid first "
                      "(gdalwarp)");
   }
@@ -402,8 +382,8 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
   }
   if (gt[1] * gt[5] - gt[2] * gt[4] == 0.0) {
     char coefficients[128];
-    std::snprintf(coefficients, sizeof coefficients, "%.9g, %.9g, %.9g, %.9g", gt[1], gt[2],
-                  gt[4], gt[5]);
+    std::snprintf(coefficients, sizeof coefficients, "%.9g, %.9g, %.9g, %.9g", gt[1], gt[2], gt[4],
+                  gt[5]);
     throw InputError(path + ": geotransform has zero cell size (" + coefficients + ")");
   }
   // Cells so small beside the coordinates' magnitude that doubles hardly tell their corners
@@ -423,10 +403,16 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
       throw InputError(path + why);
     }
   }
+}
 
+// The output CRS (--t-srs, the DEM's own if projected, else its UTM zone), the transformations
+// to and from it, and the metric frame of the grid in it (core::GridFrame) into dem.
+void set_output_crs(GDALDataset& ds, const std::string& path, const DemReadOptions& options,
+                    int width, int height, DemInfo& dem) {
+  const double* gt = dem.geotransform;
   // CRS: distances and volumes must be metric; project geographic coordinates.
   OGRSpatialReference src;
-  const char* wkt = ds->GetProjectionRef();
+  const char* wkt = ds.GetProjectionRef();
   const bool has_crs = wkt && *wkt && src.importFromWkt(wkt) == OGRERR_NONE;
   src.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
   if (has_crs && src.IsGeocentric()) {
@@ -498,9 +484,10 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
   } catch (const std::invalid_argument& e) {
     throw InputError(path + ": degenerate cell geometry (" + std::string(e.what()) + ")");
   }
+}
 
-  GDALRasterBand* band = ds->GetRasterBand(options.band);
-  dem.band = options.band;
+// The band's cell type, no-data, scale and offset (feet made metres) and blocks into dem.
+void read_band_info(GDALRasterBand* band, const std::string& path, DemInfo& dem) {
   const GDALDataType type = band->GetRasterDataType();
   dem.type_name = GDALGetDataTypeName(type) ? GDALGetDataTypeName(type) : "unknown";
   if (GDALDataTypeIsComplex(type) || type == GDT_Unknown) {
@@ -547,6 +534,46 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
   band->GetBlockSize(&dem.block_width, &dem.block_height);
   dem.block_width = std::max(1, dem.block_width);
   dem.block_height = std::max(1, dem.block_height);
+}
+
+}  // namespace
+
+DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
+  DemInfo dem;
+  dem.path = path;
+  dem.stamp = DemInfo::stamp_of(path);
+  check_plain_file(path);
+
+  CPLErrorReset();
+  std::unique_ptr<GDALDataset, DatasetCloser> ds(
+      GDALDataset::Open(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY | GDAL_OF_VERBOSE_ERROR));
+  if (!ds) {
+    const std::string why = CPLGetLastErrorMsg();
+    throw InputError(path + ": not a raster GDAL can read" +
+                     (why.empty() ? std::string() : " (" + last_gdal_error() + ")"));
+  }
+  if (ds->GetRasterCount() < 1) throw InputError(path + ": has no raster band");
+  if (options.band < 1 || options.band > ds->GetRasterCount()) {
+    throw InputError(path + ": has " + std::to_string(ds->GetRasterCount()) + " band" +
+                     (ds->GetRasterCount() == 1 ? "" : "s") + "; there is no band " +
+                     std::to_string(options.band));
+  }
+  const int width = ds->GetRasterXSize(), height = ds->GetRasterYSize();
+  check_raw_size(*ds, path);
+  dem.files = dataset_files(*ds, path);
+  if (width < 2 || height < 2) {
+    throw InputError(path + ": " + std::to_string(width) + " x " + std::to_string(height) +
+                     " cells; at least 2 x 2 are needed");
+  }
+  if (ds->GetRasterCount() > 1) {
+    dem.notes.push_back(path + ": " + std::to_string(ds->GetRasterCount()) + " bands; using band " +
+                        std::to_string(options.band) +
+                        (options.band == 1 ? " (--band picks another)" : ""));
+  }
+  read_geotransform(*ds, path, width, height, dem);
+  set_output_crs(*ds, path, options, width, height, dem);
+  dem.band = options.band;
+  read_band_info(ds->GetRasterBand(options.band), path, dem);
   dem.width = width;
   dem.height = height;
   return dem;
@@ -723,7 +750,8 @@ Dem read_dem(DemInfo info, const core::Progress& progress) {
   WindowReader reader(dem);
   dem.grid = reader.read(0, 0, dem.width, dem.height, progress);
   for (double z : dem.grid.z) dem.valid_cells += std::isnan(z) ? 0 : 1;
-  if (reader.absurd_cells() > 0) dem.notes.push_back(absurd_heights_note(dem, reader.absurd_cells()));
+  if (reader.absurd_cells() > 0)
+    dem.notes.push_back(absurd_heights_note(dem, reader.absurd_cells()));
   if (dem.valid_cells == 0) throw InputError(all_nodata_message(dem));
   return dem;
 }

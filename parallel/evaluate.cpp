@@ -8,8 +8,10 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -361,6 +363,143 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
       [&] { return pairwise_in_arena(graph, points, options, st, tokens, searched); });
 }
 
+namespace {
+
+// The geodesics of both meshes: exact (CGAL), or on their Steiner graphs.
+struct Geodesics {
+  std::unique_ptr<core::ExactGeodesics> exact_t, exact_s;
+  std::unique_ptr<core::SteinerGraph> graph_t, graph_s;
+};
+
+// Builds the exact geodesics of both meshes, or their Steiner graphs (deltas, memory and the
+// searches the budget holds into result), then says so through stage.
+Geodesics build_geodesics(const core::TriMesh& original, const core::TriMesh& simplified,
+                          const EvalOptions& options, PairwiseMethod method, std::size_t k_max,
+                          EvalResult& result,
+                          const std::function<void(const std::string&)>& stage) {
+  Geodesics g;
+  if (options.exact) {
+    try {
+      g.exact_t = std::make_unique<core::ExactGeodesics>(original);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(std::string("the DEM's grid TIN: ") + e.what());
+    }
+    g.exact_s = std::make_unique<core::ExactGeodesics>(simplified);
+    stage("exact geodesics (CGAL): T " + std::to_string(original.faces.size()) + " faces, T' " +
+          std::to_string(simplified.faces.size()) + " faces");
+    return g;
+  }
+  // note: the paper's Steiner distances need one delta on both meshes (their bias depends on
+  // it); straightened ones are exact but for near ties, whose share depends on the spacing
+  // relative to the mesh's own faces, so each mesh gets its own.
+  if (options.delta_m > 0) {
+    result.delta_m = result.delta_mesh_m = options.delta_m;
+  } else if (options.straighten) {
+    result.delta_m = kStraightenedDeltaFactor * core::mean_edge_length(original);
+    result.delta_mesh_m = kStraightenedDeltaFactor * core::mean_edge_length(simplified);
+  } else {
+    result.delta_m = result.delta_mesh_m = kDefaultDeltaFactor * core::mean_edge_length(original);
+  }
+  // Memory: both graphs, and as many searches on T (the larger graph) as the budget holds.
+  const auto est_t = core::SteinerGraph::estimate(original, result.delta_m);
+  const auto est_s = core::SteinerGraph::estimate(simplified, result.delta_mesh_m);
+  result.graphs_bytes = est_t.bytes + est_s.bytes;
+  result.search_bytes = core::GeodesicQuery::estimate_bytes(
+      std::max(est_t.nodes, est_s.nodes), std::max(original.faces.size(), simplified.faces.size()),
+      k_max, options.straighten);
+  if (options.memory_budget_bytes > 0) {
+    const std::size_t need = result.graphs_bytes + min_searches(method) * result.search_bytes;
+    if (need > options.memory_budget_bytes) {
+      throw InputError(
+          "the geodesics need about " + format_bytes(static_cast<double>(need)) +
+          " (Steiner graphs " + format_bytes(static_cast<double>(result.graphs_bytes)) + ", " +
+          std::to_string(min_searches(method)) + " searches of " +
+          format_bytes(static_cast<double>(result.search_bytes)) + "), more than the " +
+          format_bytes(static_cast<double>(options.memory_budget_bytes)) +
+          " available (--max-memory); use a larger --delta");
+    }
+    const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
+    result.max_searches =
+        std::min((options.memory_budget_bytes - result.graphs_bytes) / result.search_bytes,
+                 unbounded_searches(threads));
+  }
+  g.graph_t = std::make_unique<core::SteinerGraph>(original, result.delta_m);
+  g.graph_s = std::make_unique<core::SteinerGraph>(simplified, result.delta_mesh_m);
+  result.original_nodes = g.graph_t->node_count();
+  result.simplified_nodes = g.graph_s->node_count();
+  stage("Steiner graphs: T " + std::to_string(result.original_nodes) + " nodes, T' " +
+        std::to_string(result.simplified_nodes) + " nodes");
+  return g;
+}
+
+// The points xy located on a mesh (snapped within snap_m, counted into snapped); an
+// InputError saying how many of the set's points lie outside `footprint` if any do.
+std::vector<core::SurfacePoint> locate_all(const core::PointLocator& locate,
+                                           const std::vector<std::array<double, 2>>& xy,
+                                           double snap_m, std::size_t& snapped,
+                                           const std::string& what, const std::string& footprint) {
+  std::vector<core::SurfacePoint> out;
+  std::size_t outside = 0;
+  for (const auto& p : xy) {
+    const auto hit = locate.locate(p[0], p[1], snap_m);
+    if (!hit) {
+      ++outside;
+      continue;
+    }
+    snapped += hit->snapped;
+    out.push_back(hit->point);
+  }
+  if (outside > 0) {
+    throw InputError(std::to_string(outside) + " of " + std::to_string(xy.size()) + what +
+                     " lie outside " + footprint);
+  }
+  return out;
+}
+
+// One set's error from its pair distances on T (dt) and T' (ds), k x k, into result.
+// note: never silently wrong: a pair T connects but T' does not fails the run (the mesh is in
+// parts or slit); a pair T does not connect has no distance to compare and is counted apart.
+void score_set(const std::vector<double>& dt, const std::vector<double>& ds, std::size_t k,
+               std::size_t set, const std::string& set_name, bool keep_pairs, EvalResult& result) {
+  double sum = 0.0;
+  std::size_t measured = 0, unconnected = 0, coincident = 0, broken = 0;
+  for (std::size_t i = 0; i < k; ++i) {
+    for (std::size_t j = i + 1; j < k; ++j) {
+      const double a = dt[i * k + j], b = ds[i * k + j];
+      if (keep_pairs) {
+        result.pairs.push_back({static_cast<std::uint32_t>(set), static_cast<std::uint32_t>(i),
+                                static_cast<std::uint32_t>(j), a, b});
+      }
+      if (!std::isfinite(a)) {
+        ++unconnected;
+      } else if (!(a > 0)) {
+        ++coincident;
+      } else if (!std::isfinite(b)) {
+        ++broken;
+      } else {
+        sum += std::fabs(a - b) / a;
+        ++measured;
+      }
+    }
+  }
+  if (broken > 0) {
+    throw InputError("the mesh does not connect " + std::to_string(broken) + " of the " +
+                     std::to_string(broken + measured) + " pairs of " + set_name +
+                     " that T connects (is it in several parts, or slit?)");
+  }
+  if (measured == 0) {
+    throw InputError(set_name + ": none of its " + std::to_string(k * (k - 1) / 2) +
+                     " pairs can be measured (" + std::to_string(unconnected) +
+                     " not connected on T, " + std::to_string(coincident) + " at distance 0 on T)");
+  }
+  result.pairs_measured += measured;
+  result.pairs_unconnected += unconnected;
+  result.pairs_coincident += coincident;
+  result.set_errors.push_back(sum / static_cast<double>(measured));
+}
+
+}  // namespace
+
 EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh& simplified,
                               const EvalOptions& options, const core::Progress& progress) {
   auto stage = [&](const std::string& what) {
@@ -380,61 +519,8 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
   auto set_name = [&](std::size_t set) {
     return given ? "sample set " + std::to_string(set) : "set " + std::to_string(set + 1);
   };
-
-  // The geodesics: exact (CGAL), or on the two Steiner graphs.
-  std::unique_ptr<core::ExactGeodesics> exact_t, exact_s;
-  std::unique_ptr<core::SteinerGraph> graph_t, graph_s;
-  if (options.exact) {
-    try {
-      exact_t = std::make_unique<core::ExactGeodesics>(original);
-    } catch (const std::invalid_argument& e) {
-      throw InputError(std::string("the DEM's grid TIN: ") + e.what());
-    }
-    exact_s = std::make_unique<core::ExactGeodesics>(simplified);
-    stage("exact geodesics (CGAL): T " + std::to_string(original.faces.size()) + " faces, T' " +
-          std::to_string(simplified.faces.size()) + " faces");
-  } else {
-    // note: the paper's Steiner distances need one delta on both meshes (their bias depends on
-    // it); straightened ones are exact but for near ties, whose share depends on the spacing
-    // relative to the mesh's own faces, so each mesh gets its own.
-    if (options.delta_m > 0) {
-      result.delta_m = result.delta_mesh_m = options.delta_m;
-    } else if (options.straighten) {
-      result.delta_m = kStraightenedDeltaFactor * core::mean_edge_length(original);
-      result.delta_mesh_m = kStraightenedDeltaFactor * core::mean_edge_length(simplified);
-    } else {
-      result.delta_m = result.delta_mesh_m = kDefaultDeltaFactor * core::mean_edge_length(original);
-    }
-    // Memory: both graphs, and as many searches on T (the larger graph) as the budget holds.
-    const auto est_t = core::SteinerGraph::estimate(original, result.delta_m);
-    const auto est_s = core::SteinerGraph::estimate(simplified, result.delta_mesh_m);
-    result.graphs_bytes = est_t.bytes + est_s.bytes;
-    result.search_bytes = core::GeodesicQuery::estimate_bytes(
-        std::max(est_t.nodes, est_s.nodes),
-        std::max(original.faces.size(), simplified.faces.size()), k_max, options.straighten);
-    if (options.memory_budget_bytes > 0) {
-      const std::size_t need = result.graphs_bytes + min_searches(method) * result.search_bytes;
-      if (need > options.memory_budget_bytes) {
-        throw InputError(
-            "the geodesics need about " + format_bytes(static_cast<double>(need)) +
-            " (Steiner graphs " + format_bytes(static_cast<double>(result.graphs_bytes)) + ", " +
-            std::to_string(min_searches(method)) + " searches of " +
-            format_bytes(static_cast<double>(result.search_bytes)) + "), more than the " +
-            format_bytes(static_cast<double>(options.memory_budget_bytes)) +
-            " available (--max-memory); use a larger --delta");
-      }
-      const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
-      result.max_searches =
-          std::min((options.memory_budget_bytes - result.graphs_bytes) / result.search_bytes,
-                   unbounded_searches(threads));
-    }
-    graph_t = std::make_unique<core::SteinerGraph>(original, result.delta_m);
-    graph_s = std::make_unique<core::SteinerGraph>(simplified, result.delta_mesh_m);
-    result.original_nodes = graph_t->node_count();
-    result.simplified_nodes = graph_s->node_count();
-    stage("Steiner graphs: T " + std::to_string(result.original_nodes) + " nodes, T' " +
-          std::to_string(result.simplified_nodes) + " nodes");
-  }
+  const Geodesics geo =
+      build_geodesics(original, simplified, options, method, k_max, result, stage);
   const core::PointLocator locate_s(simplified);
   std::optional<core::PointLocator> locate_t;
   if (given) locate_t.emplace(original);
@@ -454,7 +540,7 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
           return progress(static_cast<double>(done) / static_cast<double>(k - 1), name);
         };
       }
-      d = exact_pairwise_distances(on_t ? *exact_t : *exact_s, points, on_source);
+      d = exact_pairwise_distances(on_t ? *geo.exact_t : *geo.exact_s, points, on_source);
     } else {
       PairwiseOptions po;
       po.method = method;
@@ -465,7 +551,7 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
           if (!progress(static_cast<double>(searched) / static_cast<double>(k), name)) stop = true;
         };
       }
-      d = pairwise_distances(on_t ? *graph_t : *graph_s, points, po, &stats);
+      d = pairwise_distances(on_t ? *geo.graph_t : *geo.graph_s, points, po, &stats);
     }
     if (stop) throw Cancelled();
     return d;
@@ -473,46 +559,22 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
   PairwiseStats stats_t, stats_s;
   double queries = 0;  // Steiner queries: one per source
   for (std::size_t set = 0; set < sets; ++set) {
-    // The set's points on T: drawn, or given and located.
+    // The set's points on T (drawn, or given and located), then on T'.
     std::vector<core::SurfacePoint> on_t;
     if (given) {
-      std::size_t outside = 0;
-      for (const auto& xy : options.sample_xy[set]) {
-        const auto hit = locate_t->locate(xy[0], xy[1], options.snap_m);
-        if (!hit) {
-          ++outside;
-          continue;
-        }
-        result.snapped += hit->snapped;
-        on_t.push_back(hit->point);
-      }
-      if (outside > 0) {
-        throw InputError(std::to_string(outside) + " of " +
-                         std::to_string(options.sample_xy[set].size()) + " points of " +
-                         set_name(set) + " lie outside the DEM's footprint");
-      }
+      on_t = locate_all(*locate_t, options.sample_xy[set], options.snap_m, result.snapped,
+                        " points of " + set_name(set), "the DEM's footprint");
     } else {
       const std::uint64_t seed =
           options.seed * 0x9E3779B97F4A7C15ull + static_cast<std::uint64_t>(set) + 1;
       on_t = core::sample_uniform(original, static_cast<std::size_t>(options.points), seed);
     }
     const std::size_t k = on_t.size();
-    std::vector<core::SurfacePoint> on_s;
-    std::size_t outside = 0;
-    for (const auto& p : on_t) {
-      const auto hit = locate_s.locate(p.x, p.y, options.snap_m);
-      if (!hit) {
-        ++outside;
-        continue;
-      }
-      result.snapped += hit->snapped;
-      on_s.push_back(hit->point);
-    }
-    if (outside > 0) {
-      throw InputError(std::to_string(outside) + " of " + std::to_string(k) +
-                       (given ? " points of " : " sample points of ") + set_name(set) +
-                       " lie outside the mesh's footprint");
-    }
+    std::vector<std::array<double, 2>> xy_t(k);
+    for (std::size_t i = 0; i < k; ++i) xy_t[i] = {on_t[i].x, on_t[i].y};
+    const std::vector<core::SurfacePoint> on_s = locate_all(
+        locate_s, xy_t, options.snap_m, result.snapped,
+        (given ? " points of " : " sample points of ") + set_name(set), "the mesh's footprint");
     const std::string stage_name =
         given ? set_name(set) + " (" + std::to_string(set + 1) + "/" + std::to_string(sets) + ")"
               : "set " + std::to_string(set + 1) + "/" + std::to_string(sets);
@@ -525,45 +587,7 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
     result.original_s += std::chrono::duration<double>(t1 - t0).count();
     result.simplified_s += std::chrono::duration<double>(t2 - t1).count();
     queries += static_cast<double>(k);
-    // The set's error. note: never silently wrong: a pair T connects but T' does not fails the
-    // run (the mesh is in parts or slit); a pair T does not connect has no distance to compare
-    // and is counted apart.
-    double sum = 0.0;
-    std::size_t measured = 0, unconnected = 0, coincident = 0, broken = 0;
-    for (std::size_t i = 0; i < k; ++i) {
-      for (std::size_t j = i + 1; j < k; ++j) {
-        const double a = dt[i * k + j], b = ds[i * k + j];
-        if (options.keep_pairs) {
-          result.pairs.push_back({static_cast<std::uint32_t>(set), static_cast<std::uint32_t>(i),
-                                  static_cast<std::uint32_t>(j), a, b});
-        }
-        if (!std::isfinite(a)) {
-          ++unconnected;
-        } else if (!(a > 0)) {
-          ++coincident;
-        } else if (!std::isfinite(b)) {
-          ++broken;
-        } else {
-          sum += std::fabs(a - b) / a;
-          ++measured;
-        }
-      }
-    }
-    if (broken > 0) {
-      throw InputError("the mesh does not connect " + std::to_string(broken) + " of the " +
-                       std::to_string(broken + measured) + " pairs of " + set_name(set) +
-                       " that T connects (is it in several parts, or slit?)");
-    }
-    if (measured == 0) {
-      throw InputError(set_name(set) + ": none of its " + std::to_string(k * (k - 1) / 2) +
-                       " pairs can be measured (" + std::to_string(unconnected) +
-                       " not connected on T, " + std::to_string(coincident) +
-                       " at distance 0 on T)");
-    }
-    result.pairs_measured += measured;
-    result.pairs_unconnected += unconnected;
-    result.pairs_coincident += coincident;
-    result.set_errors.push_back(sum / static_cast<double>(measured));
+    score_set(dt, ds, k, set, set_name(set), options.keep_pairs, result);
   }
   result.original_one_way = stats_t.one_way_pairs;
   result.simplified_one_way = stats_s.one_way_pairs;

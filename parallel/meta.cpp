@@ -323,94 +323,70 @@ void check_memory(const core::RasterSource& dem, std::size_t target, std::size_t
                    " available; keep fewer (--keep, --vertices) or use a smaller --tile-mb");
 }
 
-MetaResult simplify_meta(const core::RasterSource& dem, const MetaOptions& options,
-                         const core::Progress& progress, MetaStats* stats) {
-  if (dem.cell_count() > core::kMaxGridCells) {
-    throw InputError(dem.name() +
-                     ": more than 2^32 cells, too many for the meta engine (32-bit cell ids)");
+namespace {
+
+// Stage 2: the pieces' values, concurrently (each task reads its piece through its own handle);
+// stage 3: their budgets, the paper's P2L per piece with the total exactly the target.
+void value_and_budget(const core::RasterSource& dem, const std::vector<core::Piece>& pieces,
+                      const MetaOptions& options, const core::Progress& progress, MetaStats& st) {
+  SharedProgress shared(progress, pieces.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pieces.size(), 1),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                        shared.check();
+                        const core::Piece& p = pieces[i];
+                        const core::HeightGrid g = dem.read(p.col0, p.row0, p.width, p.height);
+                        tbb::this_task_arena::isolate([&] {
+                          st.pieces[i].value =
+                              piece_value(g, p.col0, p.row0, dem.frame(), options.value_points,
+                                          options.value_cells, piece_seed(options.seed, i));
+                        });
+                        shared.update(i, 1.0, "values");
+                      }
+                    });
+  shared.check();
+  std::vector<std::size_t> counts;
+  std::vector<double> values;
+  for (const auto& p : st.pieces) {
+    counts.push_back(p.piece.vertices);
+    values.push_back(p.value);
   }
-  MetaStats local;
-  MetaStats& st = stats ? *stats : local;
-  const auto bytes = options.tile_bytes;
+  const double p2l =
+      100.0 * static_cast<double>(st.target_vertices) / static_cast<double>(st.input_vertices);
+  const auto budgets = core::piece_budgets(counts, values, p2l);
+  for (std::size_t i = 0; i < budgets.size(); ++i) st.pieces[i].budget = budgets[i];
+}
 
-  // 1. Count surface vertices per block, streaming; divide.
-  const std::vector<core::Piece> pieces =
-      divide_dem(dem, options.keep, options.levels, bytes, options.halo, progress, st);
-  check_memory(
-      dem, st.target_vertices,
-      meta_memory_estimate(st.target_vertices, pieces_in_flight_bytes(pieces, options.halo, bytes)),
-      options.memory_limit_bytes);
-  auto t0 = std::chrono::steady_clock::now();
-
-  // 2. Piece values, concurrently: each task reads its piece through its own handle.
-  {
-    SharedProgress shared(progress, pieces.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pieces.size(), 1),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                          shared.check();
-                          const core::Piece& p = pieces[i];
-                          const core::HeightGrid g = dem.read(p.col0, p.row0, p.width, p.height);
-                          tbb::this_task_arena::isolate([&] {
-                            st.pieces[i].value =
-                                piece_value(g, p.col0, p.row0, dem.frame(), options.value_points,
-                                            options.value_cells, piece_seed(options.seed, i));
-                          });
-                          shared.update(i, 1.0, "values");
-                        }
-                      });
-    shared.check();
-  }
-  st.values_s = seconds_since(t0);
-
-  // 3. Budgets: the paper's P2L per piece, with the total exactly the target.
-  {
-    std::vector<std::size_t> counts;
-    std::vector<double> values;
-    for (const auto& p : st.pieces) {
-      counts.push_back(p.piece.vertices);
-      values.push_back(p.value);
-    }
-    const double p2l =
-        100.0 * static_cast<double>(st.target_vertices) / static_cast<double>(st.input_vertices);
-    const auto budgets = core::piece_budgets(counts, values, p2l);
-    for (std::size_t i = 0; i < budgets.size(); ++i) st.pieces[i].budget = budgets[i];
-  }
-
-  // 4. Simplify the pieces concurrently; keep only their kept vertices and outline edges.
-  t0 = std::chrono::steady_clock::now();
+// Stage 4: the pieces simplified concurrently; only their kept vertices and outline edges kept.
+std::vector<PieceOutput> simplify_pieces(const core::RasterSource& dem,
+                                         const std::vector<core::Piece>& pieces,
+                                         const MetaOptions& options, const core::Progress& progress,
+                                         MetaStats& st) {
   std::vector<PieceOutput> outputs(pieces.size());
-  {
-    SharedProgress shared(progress, pieces.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pieces.size(), 1),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                          shared.check();
-                          const core::Progress piece_progress = [&](double fr, std::string_view) {
-                            return shared.update(i, fr, "simplify");
-                          };
-                          outputs[i] = simplify_piece(dem, pieces[i], st.pieces[i].budget, options,
-                                                      st.pieces[i], piece_progress);
-                          release_free_memory();
-                          shared.update(i, 1.0, "simplify");
-                        }
-                      });
-    shared.check();
-  }
-  st.simplify_s = seconds_since(t0);
+  SharedProgress shared(progress, pieces.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pieces.size(), 1),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                        shared.check();
+                        const core::Progress piece_progress = [&](double fr, std::string_view) {
+                          return shared.update(i, fr, "simplify");
+                        };
+                        outputs[i] = simplify_piece(dem, pieces[i], st.pieces[i].budget, options,
+                                                    st.pieces[i], piece_progress);
+                        release_free_memory();
+                        shared.update(i, 1.0, "simplify");
+                      }
+                    });
+  shared.check();
+  return outputs;
+}
 
-  // 5. Merge: one Delaunay triangulation of all kept vertices, in a fixed order.
-  st.peak_rss_before_merge_kb = peak_rss_kb();
-  for (const auto& o : outputs) {
-    st.kept_bytes += o.cells.capacity() * sizeof(std::uint32_t) + o.z.capacity() * sizeof(double) +
-                     o.outline.capacity() * sizeof(core::OutlineEdge) +
-                     o.tail.capacity() * sizeof(core::Removal) +
-                     o.tail_z.capacity() * sizeof(double);
-  }
-  t0 = std::chrono::steady_clock::now();
-  if (progress && !progress(0.0, "merge")) throw Cancelled();
-  // Pieces whose outline kept them above budget leave a deficit; the others make it up from
-  // their logged tails, in proportion to their tails' lengths (largest remainder).
+// The merge's input: every piece's kept cells (sorted, with heights) and outline edges. Pieces
+// whose outline kept them above budget leave a deficit; the others make it up from their
+// logged tails, in proportion to their tails' lengths (largest remainder). Empties outputs.
+void gather_kept(std::vector<PieceOutput>& outputs, MetaStats& st,
+                 std::vector<std::pair<std::uint32_t, double>>& kept,
+                 std::vector<core::OutlineEdge>& outline) {
   std::size_t deficit = 0, room = 0;
   for (std::size_t i = 0; i < outputs.size(); ++i) {
     deficit += outputs[i].kept_at_budget - st.pieces[i].budget;
@@ -426,8 +402,6 @@ MetaResult simplify_meta(const core::RasterSource& dem, const MetaOptions& optio
     }
     extra = core::largest_remainder(shares, std::min(deficit, room), caps);
   }
-  std::vector<std::pair<std::uint32_t, double>> kept;
-  std::vector<core::OutlineEdge> outline;
   for (std::size_t i = 0; i < outputs.size(); ++i) {
     PieceOutput& o = outputs[i];
     // Take back the tail's removals after the first extra[i], last first, splitting chords.
@@ -457,6 +431,49 @@ MetaResult simplify_meta(const core::RasterSource& dem, const MetaOptions& optio
     o = {};
   }
   std::sort(kept.begin(), kept.end());
+}
+
+}  // namespace
+
+MetaResult simplify_meta(const core::RasterSource& dem, const MetaOptions& options,
+                         const core::Progress& progress, MetaStats* stats) {
+  if (dem.cell_count() > core::kMaxGridCells) {
+    throw InputError(dem.name() +
+                     ": more than 2^32 cells, too many for the meta engine (32-bit cell ids)");
+  }
+  MetaStats local;
+  MetaStats& st = stats ? *stats : local;
+  const auto bytes = options.tile_bytes;
+
+  // 1. Count surface vertices per block, streaming; divide.
+  const std::vector<core::Piece> pieces =
+      divide_dem(dem, options.keep, options.levels, bytes, options.halo, progress, st);
+  check_memory(
+      dem, st.target_vertices,
+      meta_memory_estimate(st.target_vertices, pieces_in_flight_bytes(pieces, options.halo, bytes)),
+      options.memory_limit_bytes);
+  auto t0 = std::chrono::steady_clock::now();
+  // 2, 3. Piece values and budgets.
+  value_and_budget(dem, pieces, options, progress, st);
+  st.values_s = seconds_since(t0);
+  // 4. Simplify the pieces.
+  t0 = std::chrono::steady_clock::now();
+  std::vector<PieceOutput> outputs = simplify_pieces(dem, pieces, options, progress, st);
+  st.simplify_s = seconds_since(t0);
+
+  // 5. Merge: one Delaunay triangulation of all kept vertices, in a fixed order.
+  st.peak_rss_before_merge_kb = peak_rss_kb();
+  for (const auto& o : outputs) {
+    st.kept_bytes += o.cells.capacity() * sizeof(std::uint32_t) + o.z.capacity() * sizeof(double) +
+                     o.outline.capacity() * sizeof(core::OutlineEdge) +
+                     o.tail.capacity() * sizeof(core::Removal) +
+                     o.tail_z.capacity() * sizeof(double);
+  }
+  t0 = std::chrono::steady_clock::now();
+  if (progress && !progress(0.0, "merge")) throw Cancelled();
+  std::vector<std::pair<std::uint32_t, double>> kept;
+  std::vector<core::OutlineEdge> outline;
+  gather_kept(outputs, st, kept, outline);
   MetaResult result;
   std::vector<std::uint32_t> cells(kept.size());
   result.z.resize(kept.size());
