@@ -148,27 +148,33 @@ std::vector<std::string> batch_inputs(const std::string& source) {
   return inputs;
 }
 
-int run_batch(const ParOptions& o, const std::string& self, const std::atomic<int>* cancel) {
-  const auto start = std::chrono::steady_clock::now();
-  const std::vector<std::string> inputs = batch_inputs(o.batch);
-  std::error_code ec;
-  fs::create_directories(o.out_dir, ec);
-  if (!fs::is_directory(o.out_dir, ec)) {
-    throw IoError(o.out_dir + ": cannot create the output folder");
+namespace {
+
+// The out folder's batch lock, held while the object lives (and with the process: also when
+// it is killed). One batch at a time in a folder: a second would redo and overwrite the
+// first's work and summary.
+class BatchLock {
+ public:
+  explicit BatchLock(const std::string& out_dir) {
+    const std::string lock_path = (fs::path(out_dir) / kBatchLockName).string();
+    fd_ = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0) throw IoError(lock_path + ": cannot create the batch lock");
+    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      ::close(fd_);
+      throw IoError(out_dir + ": another dpts-par batch is writing into it");
+    }
   }
-  // One batch at a time in a folder: a second would redo and overwrite the first's work and
-  // summary. The lock goes with the process (also when it is killed).
-  const std::string lock_path = (fs::path(o.out_dir) / kBatchLockName).string();
-  const int lock = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (lock < 0) throw IoError(lock_path + ": cannot create the batch lock");
-  struct LockCloser {
-    int fd;
-    ~LockCloser() { ::close(fd); }
-  } lock_closer{lock};
-  if (::flock(lock, LOCK_EX | LOCK_NB) != 0) {
-    throw IoError(o.out_dir + ": another dpts-par batch is writing into it");
-  }
-  // One output and one report per input, named after it; two inputs may not share a name.
+  ~BatchLock() { ::close(fd_); }
+  BatchLock(const BatchLock&) = delete;
+  BatchLock& operator=(const BatchLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
+// One job per input: its output and report in the out folder, named after it; two inputs may
+// not share a name, nor take the summary's.
+std::vector<Job> plan_jobs(const std::vector<std::string>& inputs, const ParOptions& o) {
   std::vector<Job> jobs;
   std::map<std::string, std::string> names;
   for (const auto& input : inputs) {
@@ -185,6 +191,80 @@ int run_batch(const ParOptions& o, const std::string& self, const std::atomic<in
     job.report = (fs::path(o.out_dir) / (stem + ".json")).string();
     jobs.push_back(job);
   }
+  return jobs;
+}
+
+// Starts `self` with args for the job (its start time set); the child's stderr goes nowhere:
+// its messages are in its report, and the batch prints them. -1 if it cannot be started.
+pid_t start_child(const std::string& self, std::vector<std::string>& args, Job& job) {
+  job.start = std::chrono::steady_clock::now();
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int null = ::open("/dev/null", O_WRONLY);
+    if (null >= 0) ::dup2(null, 2);
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    ::execv(self.c_str(), argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+// Writes OUT/batch-summary.json: counts, failures with their messages, every input's outcome.
+// Returns the counts by status.
+std::map<std::string, std::size_t> write_summary(const ParOptions& o, const std::vector<Job>& jobs,
+                                                 bool stopping, int parallel, int per_job,
+                                                 double wall) {
+  std::map<std::string, std::size_t> counts;
+  io::JsonArray failures, results;
+  for (const Job& job : jobs) {
+    ++counts[job.status];
+    io::JsonObject outcome;
+    outcome.add("input", job.input).add("status", job.status);
+    if (job.status == "failed" || job.status == "interrupted") {
+      failures.raw(io::JsonObject(outcome).add("error", job.error).str());
+    }
+    results.raw(outcome.add("output", job.output)
+                    .add("report", job.report)
+                    .add("wall_s", job.wall_s)
+                    .str());
+  }
+  io::JsonObject summary;
+  summary.add("dpts_version", DPTS_VERSION)
+      .add("batch", o.batch)
+      .add("out_dir", o.out_dir)
+      .add("interrupted", stopping)
+      .add("inputs", jobs.size())
+      .add("ok", counts["ok"])
+      .add("skipped", counts["skipped"])
+      .add("failed", counts["failed"])
+      .add("interrupted_inputs", counts["interrupted"])
+      .add("not_run", counts["not run"])
+      .add("jobs", parallel)
+      .add("threads_per_job", per_job)
+      .add("wall_s", wall)
+      .raw("options", output_options_json(o))
+      .raw("failures", failures.str())
+      .raw("results", results.str());
+  io::AtomicOutputFile out((fs::path(o.out_dir) / "batch-summary.json").string());
+  out.stream() << summary.str() << "\n";
+  out.commit();
+  return counts;
+}
+
+}  // namespace
+
+int run_batch(const ParOptions& o, const std::string& self, const std::atomic<int>* cancel) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<std::string> inputs = batch_inputs(o.batch);
+  std::error_code ec;
+  fs::create_directories(o.out_dir, ec);
+  if (!fs::is_directory(o.out_dir, ec)) {
+    throw IoError(o.out_dir + ": cannot create the output folder");
+  }
+  const BatchLock lock(o.out_dir);
+  std::vector<Job> jobs = plan_jobs(inputs, o);
   // Threads and memory shared out: never more than --threads in all.
   const int threads = par::thread_count(o.threads);
   const int parallel = std::max(1, std::min(o.jobs, threads));
@@ -230,18 +310,7 @@ int run_batch(const ParOptions& o, const std::string& self, const std::atomic<in
                                    std::string("--report"), job.report, job.input, job.output}) {
         args.push_back(a);
       }
-      job.start = std::chrono::steady_clock::now();
-      const pid_t pid = ::fork();
-      if (pid == 0) {
-        // The child's messages are in its report (and the batch prints them): not twice.
-        const int null = ::open("/dev/null", O_WRONLY);
-        if (null >= 0) ::dup2(null, 2);
-        std::vector<char*> argv;
-        for (auto& a : args) argv.push_back(a.data());
-        argv.push_back(nullptr);
-        ::execv(self.c_str(), argv.data());
-        ::_exit(127);
-      }
+      const pid_t pid = start_child(self, args, job);
       if (pid < 0) {
         job.status = "failed";
         job.error = "cannot start dpts-par";
@@ -267,42 +336,9 @@ int run_batch(const ParOptions& o, const std::string& self, const std::atomic<in
     report_line(job);
   }
 
-  // The summary: counts, failures with their messages, every input's outcome.
-  std::map<std::string, std::size_t> counts;
-  io::JsonArray failures, results;
-  for (const Job& job : jobs) {
-    ++counts[job.status];
-    io::JsonObject outcome;
-    outcome.add("input", job.input).add("status", job.status);
-    if (job.status == "failed" || job.status == "interrupted") {
-      failures.raw(io::JsonObject(outcome).add("error", job.error).str());
-    }
-    results.raw(outcome.add("output", job.output)
-                    .add("report", job.report)
-                    .add("wall_s", job.wall_s)
-                    .str());
-  }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  io::JsonObject summary;
-  summary.add("dpts_version", DPTS_VERSION)
-      .add("batch", o.batch)
-      .add("out_dir", o.out_dir)
-      .add("interrupted", stopping)
-      .add("inputs", jobs.size())
-      .add("ok", counts["ok"])
-      .add("skipped", counts["skipped"])
-      .add("failed", counts["failed"])
-      .add("interrupted_inputs", counts["interrupted"])
-      .add("not_run", counts["not run"])
-      .add("jobs", parallel)
-      .add("threads_per_job", per_job)
-      .add("wall_s", wall)
-      .raw("options", output_options_json(o))
-      .raw("failures", failures.str())
-      .raw("results", results.str());
-  io::AtomicOutputFile out((fs::path(o.out_dir) / "batch-summary.json").string());
-  out.stream() << summary.str() << "\n";
-  out.commit();
+  std::map<std::string, std::size_t> counts =
+      write_summary(o, jobs, stopping, parallel, per_job, wall);
   const std::size_t done = counts["ok"] + counts["skipped"];
   if (!o.quiet || done != jobs.size()) {
     std::fprintf(stderr,

@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <optional>
 
 #include "api/evaluation.hpp"
@@ -405,6 +406,37 @@ void print_report(const Options& o, const dpts::api::Evaluation& ev, double secs
   std::printf("time             %.2f s\n", secs);
 }
 
+// Progress on stderr once the run has lasted a second (not when quiet): a line as each stage
+// starts, and within a long geodesic stage one per tenth of its sources searched, at most every
+// kProgressEvery seconds. Returns false (stop) once a signal asked for it.
+dpts::core::Progress progress_lines(bool quiet, std::chrono::steady_clock::time_point start) {
+  constexpr double kProgressEvery = 10;
+  struct Last {
+    double line = 0;
+    int tenth = 0;
+  };
+  auto last = std::make_shared<Last>();
+  return [quiet, start, last](double fraction, std::string_view stage) {
+    const std::string what(stage);
+    if (g_cancel.load(std::memory_order_relaxed) != 0) return false;
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (quiet || elapsed < 1.0) return true;
+    const int tenth = static_cast<int>(fraction * 10);
+    if (fraction == 0) {
+      std::fprintf(stderr, "dpts-eval: %s (%.0f s)\n", what.c_str(), elapsed);
+    } else if (tenth > last->tenth && tenth < 10 && elapsed - last->line >= kProgressEvery) {
+      std::fprintf(stderr, "dpts-eval: %s: %d %% of the sources searched (%.0f s)\n", what.c_str(),
+                   10 * tenth, elapsed);
+    } else {
+      return true;
+    }
+    last->line = elapsed;
+    last->tenth = tenth;
+    return true;
+  };
+}
+
 int run(const Options& o) {
   using namespace dpts;
   if (o.help) {
@@ -460,31 +492,7 @@ int run(const Options& o) {
     hillshade_png = p.hillshade;
   }
 
-  // Progress on stderr once the run has lasted a second (not with --quiet): a line as each
-  // stage starts, and within a long geodesic stage one per tenth of its sources searched, at
-  // most every kProgressEvery seconds.
-  constexpr double kProgressEvery = 10;
-  double last_line = 0;
-  int last_tenth = 0;
-  const core::Progress progress = [&](double fraction, std::string_view stage) {
-    const std::string what(stage);
-    if (g_cancel.load(std::memory_order_relaxed) != 0) return false;
-    const double elapsed =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (o.quiet || elapsed < 1.0) return true;
-    const int tenth = static_cast<int>(fraction * 10);
-    if (fraction == 0) {
-      std::fprintf(stderr, "dpts-eval: %s (%.0f s)\n", what.c_str(), elapsed);
-    } else if (tenth > last_tenth && tenth < 10 && elapsed - last_line >= kProgressEvery) {
-      std::fprintf(stderr, "dpts-eval: %s: %d %% of the sources searched (%.0f s)\n", what.c_str(),
-                   10 * tenth, elapsed);
-    } else {
-      return true;
-    }
-    last_line = elapsed;
-    last_tenth = tenth;
-    return true;
-  };
+  const core::Progress progress = progress_lines(o.quiet, start);
   // The pairs' file is opened (created beside its path) before the long part: a folder that
   // does not exist fails now, not after the geodesics.
   std::optional<PairsOutput> pairs_out;

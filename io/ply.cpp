@@ -171,15 +171,20 @@ double read_ascii(std::istream& in, const std::string& name) {
   return v;
 }
 
-}  // namespace
+// A PLY header: its format line's word, its elements and their properties, in order; its
+// comments into `comments`.
+struct Header {
+  std::string format;
+  std::vector<Element> elements;
+};
 
-Mesh read_ply(std::istream& in, const std::string& name) {
-  Mesh mesh;
+Header read_header(std::istream& in, const std::string& name, std::vector<std::string>& comments) {
+  Header h;
+  std::string& format = h.format;
+  std::vector<Element>& elements = h.elements;
   std::string line;
   if (!std::getline(in, line) || line.substr(0, 3) != "ply")
     throw InputError(name + ": not a PLY file");
-  std::string format;
-  std::vector<Element> elements;
   for (;;) {
     if (!std::getline(in, line)) throw InputError(name + ": PLY header has no end_header");
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -190,7 +195,7 @@ Mesh read_ply(std::istream& in, const std::string& name) {
     if (key == "format") {
       ls >> format;
     } else if (key == "comment") {
-      mesh.comments.push_back(line.size() > 8 ? line.substr(8) : "");
+      comments.push_back(line.size() > 8 ? line.substr(8) : "");
     } else if (key == "element") {
       Element e;
       long long count = -1;
@@ -218,6 +223,16 @@ Mesh read_ply(std::istream& in, const std::string& name) {
       elements.back().props.push_back(p);
     }
   }
+  return h;
+}
+
+}  // namespace
+
+Mesh read_ply(std::istream& in, const std::string& name) {
+  Mesh mesh;
+  const Header h = read_header(in, name, mesh.comments);
+  const std::string& format = h.format;
+  const std::vector<Element>& elements = h.elements;
   const bool ascii = format == "ascii";
   const bool big = format == "binary_big_endian";
   if (!ascii && !big && format != "binary_little_endian") {
