@@ -64,7 +64,6 @@ double mean_edge_length(const TriMesh& mesh) {
 
 SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), delta_(delta) {
   if (!(delta > 0)) throw std::invalid_argument("Steiner spacing delta must be positive");
-  const std::size_t nv = mesh.vertex_count();
   face_edges_.resize(mesh.faces.size());
   const auto e = sorted_face_edges(mesh);
   // Count the nodes before allocating any: a mesh far larger than delta (or with a non-finite
@@ -74,7 +73,20 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
     throw std::invalid_argument("too many Steiner points (" + std::to_string(nodes) + "; at most " +
                                 std::to_string(kMaxNodes) + ")");
   }
-  nodes_.reserve(static_cast<std::size_t>(nodes));
+  build_nodes(e, static_cast<std::size_t>(nodes), edge_count);
+  link_edges();
+  bound_segments();
+  build_corners();
+}
+
+// The vertices' nodes, then each edge (from the sorted face edges, two faces at most) with its
+// Steiner points: floor(len / delta) evenly inside it.
+void SteinerGraph::build_nodes(const std::vector<std::tuple<std::uint64_t, std::uint32_t, int>>& e,
+                               std::size_t nodes, std::size_t edge_count) {
+  const TriMesh& mesh = mesh_;
+  const double delta = delta_;
+  const std::size_t nv = mesh.vertex_count();
+  nodes_.reserve(nodes);
   for (std::size_t v = 0; v < nv; ++v) {
     nodes_.push_back({{mesh.xyz[3 * v], mesh.xyz[3 * v + 1], mesh.xyz[3 * v + 2]}, kNoEdge});
   }
@@ -96,7 +108,6 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
                 static_cast<std::uint32_t>(key & 0xFFFFFFFFu)};
     for (int side = 0; side < 2; ++side) rec.sides[side].face = faces[side];
     edges_.push_back(rec);
-    // floor(len / delta) points evenly inside the edge.
     const double* a = &mesh.xyz[3 * (key >> 32)];
     const double* b = &mesh.xyz[3 * (key & 0xFFFFFFFFu)];
     const auto k = static_cast<std::uint32_t>(std::floor(dist3(a, b) / delta));
@@ -107,7 +118,11 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
     }
     edge_first_.push_back(static_cast<std::uint32_t>(nodes_.size()));
   }
-  // Each edge's record: its nodes, and per face the opposite corner and the other two edges.
+}
+
+// Each edge's record: its nodes, and per face the opposite corner and the other two edges.
+void SteinerGraph::link_edges() {
+  const TriMesh& mesh = mesh_;
   for (std::uint32_t i = 0; i < edges_.size(); ++i) {
     Edge& rec = edges_[i];
     rec.first = edge_first_[i];
@@ -124,10 +139,14 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
       }
     }
   }
-  // Segment length bounds. Two distinct nodes of a face lie on one edge (at least its node
-  // spacing apart) or on two edges meeting at a corner with angle t: then one of them is at
-  // least its edge's spacing s from the corner, and so at least s min(1, sin t) from the other
-  // edge. The longest segment is the face's longest edge.
+}
+
+// Segment length bounds. Two distinct nodes of a face lie on one edge (at least its node
+// spacing apart) or on two edges meeting at a corner with angle t: then one of them is at least
+// its edge's spacing s from the corner, and so at least s min(1, sin t) from the other edge.
+// The longest segment is the face's longest edge.
+void SteinerGraph::bound_segments() {
+  const TriMesh& mesh = mesh_;
   auto spacing = [&](std::uint32_t e, double len) {
     return len / static_cast<double>(edge_first_[e + 1] - edge_first_[e] + 1);
   };
@@ -158,7 +177,13 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
     }
   }
   if (!(min_segment_ > 0) || mesh.faces.empty()) min_segment_ = 0;
-  // Vertex -> its corners, CSR.
+}
+
+// Vertex -> its corners (CSR), each with the first node along its two edges and the Steiner
+// nodes across.
+void SteinerGraph::build_corners() {
+  const TriMesh& mesh = mesh_;
+  const std::size_t nv = mesh.vertex_count();
   corner_first_.assign(nv + 1, 0);
   for (const auto& f : mesh.faces) {
     for (auto v : f) ++corner_first_[v + 1];

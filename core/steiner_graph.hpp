@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -149,6 +150,13 @@ class SteinerGraph {
   static constexpr std::uint32_t kNoFace = 0xFFFFFFFFu;
 
  private:
+  // The constructor's steps, in order.
+  void build_nodes(const std::vector<std::tuple<std::uint64_t, std::uint32_t, int>>& face_edges,
+                   std::size_t nodes, std::size_t edge_count);
+  void link_edges();
+  void bound_segments();
+  void build_corners();
+
   const TriMesh& mesh_;
   double delta_;
   double min_segment_ = 0, max_segment_ = 0;

@@ -40,14 +40,11 @@ double straight2(const std::vector<core::SurfacePoint>& points, std::size_t i, s
   return dx * dx + dy * dy + dz * dz;
 }
 
-// Measures the pairs i < j with need[i * K + j] into out[i * K + j]: each pair by a Dijkstra
-// from the endpoint that ranks the other nearer (straight-line distance), so that every query
-// stops at about its nearest half of the points instead of the farthest; with `straighten`,
-// each pair's path is then pulled taut (the shorter length kept). Adds what the queries did to
-// `stats`; calls searched (if given) as each source is done.
-void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::SurfacePoint>& points,
-                     const std::vector<char>& need, bool straighten, std::vector<double>& out,
-                     PairwiseStats& stats, const std::function<void()>& searched) {
+// The needed pairs i < j (need[i * K + j]) shared out to the sources: each to the endpoint that
+// ranks the other nearer (straight-line distance; ties to i), so that every search stops at
+// about its nearest half of the points.
+std::vector<std::vector<std::size_t>> assign_pairs(const std::vector<core::SurfacePoint>& points,
+                                                   const std::vector<char>& need) {
   const std::size_t k = points.size();
   auto d2 = [&](std::size_t i, std::size_t j) { return straight2(points, i, j); };
   std::vector<std::vector<std::size_t>> rank(k, std::vector<std::size_t>(k, 0));
@@ -73,6 +70,19 @@ void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::Su
       }
     }
   }
+  return assigned;
+}
+
+// Measures the pairs i < j with need[i * K + j] into out[i * K + j]: each pair by a Dijkstra
+// from the endpoint that ranks the other nearer (straight-line distance), so that every query
+// stops at about its nearest half of the points instead of the farthest; with `straighten`,
+// each pair's path is then pulled taut (the shorter length kept). Adds what the queries did to
+// `stats`; calls searched (if given) as each source is done.
+void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::SurfacePoint>& points,
+                     const std::vector<char>& need, bool straighten, std::vector<double>& out,
+                     PairwiseStats& stats, const std::function<void()>& searched) {
+  const std::size_t k = points.size();
+  const std::vector<std::vector<std::size_t>> assigned = assign_pairs(points, need);
   // note: two searches, each straightened, rank the routes of a pair independently; where the
   // graph's error put one on the longer of two nearly equal routes, the other mostly is not.
   // So with `straighten`, a source also measures the pairs assigned to the other end that its

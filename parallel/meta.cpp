@@ -104,21 +104,34 @@ struct PieceOutput {
   std::size_t kept_at_budget = 0;
 };
 
-// Reads a piece with its context, simplifies it to `budget` own vertices, and returns the
-// own vertices it kept and the outline edges that touch them (raster cell indices).
-PieceOutput simplify_piece(const core::RasterSource& dem, const core::Piece& p, std::size_t budget,
-                           const MetaOptions& options, PieceReport& report,
-                           const core::Progress& progress) {
-  const int halo = std::max(2, options.halo);
-  const int wc0 = std::max(0, p.col0 - halo), wr0 = std::max(0, p.row0 - halo);
-  const int wc1 = std::min(dem.width(), p.col0 + p.width + halo);
-  const int wr1 = std::min(dem.height(), p.row0 + p.height + halo);
-  const int ww = wc1 - wc0, wh = wr1 - wr0;
-  core::HeightGrid grid = read_window(dem, wc0, wr0, ww, wh, report.read_s);
-  const auto t0 = std::chrono::steady_clock::now();
-  // Own cells (window-local): the piece. The rest is context: triangulated, never removed.
-  const int oc0 = p.col0 - wc0, or0 = p.row0 - wr0, oc1 = oc0 + p.width, or1 = or0 + p.height;
-  auto own = [&](int c, int r) { return c >= oc0 && c < oc1 && r >= or0 && r < or1; };
+// A piece's window: the piece with `halo` cells of context round it, clipped to the raster
+// (columns wc0..wc1 - 1, rows wr0..wr1 - 1), and the piece's own cells inside it (window-local
+// columns oc0..oc1 - 1, rows or0..or1 - 1).
+struct PieceWindow {
+  int wc0, wr0, wc1, wr1, ww, wh;
+  int oc0, or0, oc1, or1;
+  PieceWindow(const core::RasterSource& dem, const core::Piece& p, int halo)
+      : wc0(std::max(0, p.col0 - halo)),
+        wr0(std::max(0, p.row0 - halo)),
+        wc1(std::min(dem.width(), p.col0 + p.width + halo)),
+        wr1(std::min(dem.height(), p.row0 + p.height + halo)),
+        ww(wc1 - wc0),
+        wh(wr1 - wr0),
+        oc0(p.col0 - wc0),
+        or0(p.row0 - wr0),
+        oc1(oc0 + p.width),
+        or1(or0 + p.height) {}
+  bool own(int c, int r) const { return c >= oc0 && c < oc1 && r >= or0 && r < or1; }
+};
+
+// The elimination's options for a piece's window: the context pinned (triangulated, never
+// removed), the own outline cells next to another piece pinned too, and the chords kept inside
+// the window where other pieces' cells lie beyond it.
+core::EliminationOptions piece_options(const core::RasterSource& dem, const core::HeightGrid& grid,
+                                       const PieceWindow& w, const MetaOptions& options) {
+  const int wc0 = w.wc0, wr0 = w.wr0, wc1 = w.wc1, wr1 = w.wr1, ww = w.ww, wh = w.wh;
+  const int oc0 = w.oc0, or0 = w.or0, oc1 = w.oc1, or1 = w.or1;
+  auto own = [&](int c, int r) { return w.own(c, r); };
   core::EliminationOptions eo = options.elimination;
   eo.pinned.assign(grid.z.size(), 0);
   for (int r = 0; r < wh; ++r) {
@@ -153,7 +166,20 @@ PieceOutput simplify_piece(const core::RasterSource& dem, const core::Piece& p, 
                                       wr0 == 0 ? -inf : 0.0, wr1 == dem.height() ? inf : wh - 1.0};
   }
   eo.outline_chord_ok = dem.outline_chord_test(wc0, wr0, ww);
+  return eo;
+}
 
+// Reads a piece with its context, simplifies it to `budget` own vertices, and returns the
+// own vertices it kept and the outline edges that touch them (raster cell indices).
+PieceOutput simplify_piece(const core::RasterSource& dem, const core::Piece& p, std::size_t budget,
+                           const MetaOptions& options, PieceReport& report,
+                           const core::Progress& progress) {
+  const PieceWindow w(dem, p, std::max(2, options.halo));
+  const int wc0 = w.wc0, wr0 = w.wr0, ww = w.ww;
+  core::HeightGrid grid = read_window(dem, wc0, wr0, ww, w.wh, report.read_s);
+  const auto t0 = std::chrono::steady_clock::now();
+  auto own = [&](int c, int r) { return w.own(c, r); };
+  const core::EliminationOptions eo = piece_options(dem, grid, w, options);
   core::Eliminator elim(grid, dem.frame(), eo);
   const auto& cells = elim.cells();
   auto own_cell = [&](std::uint32_t cell) {
