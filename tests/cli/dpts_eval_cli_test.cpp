@@ -1,4 +1,6 @@
 // dpts-eval as users run it: figures, JSON, exit codes.
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -598,6 +600,22 @@ TEST_CASE("dpts-eval answers each malformed OBJ, STL and GeoPackage in one line"
        "neither binary STL (84 + 50 bytes per facet) nor ASCII STL"},
       {"junk.gpkg", "not a geopackage\n", "cannot open as a vector dataset"},
   };
+  // A mesh that is not a file: refused at once, not read (a FIFO would block).
+  {
+    const auto dir = (fx.dir / "d.obj").string();
+    std::filesystem::create_directory(dir);
+    const auto fifo = (fx.dir / "f.ply").string();
+    REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+    const auto missing = (fx.dir / "missing.stl").string();
+    for (const auto& [path, message] :
+         {std::pair<std::string, std::string>{dir, "is a directory, not a mesh"},
+          {fifo, "is a pipe or a device, not a mesh file"},
+          {missing, "no such file"}}) {
+      const auto r = test::run(kEval, {"--quiet", "--dem", fx.dem, "--mesh", path});
+      CHECK(r.exit_code == 1);
+      CHECK(r.err == "dpts-eval: error: " + path + ": " + message + "\n");
+    }
+  }
   for (const auto& c : cases) {
     INFO(c.name);
     const auto mesh = (fx.dir / c.name).string();
