@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "core/errors.hpp"
+#include "io/input_file.hpp"
 #include "io/mesh_formats.hpp"
 
 namespace dpts::io {
@@ -217,14 +218,7 @@ bool starts_with(const std::string& s, std::string_view prefix) {
 }  // namespace
 
 Mesh read_mesh_file(const std::string& path) {
-  // note: a directory would fail obscurely, a FIFO with no writer block the read forever.
-  std::error_code ec;
-  const std::filesystem::file_status st = std::filesystem::status(path, ec);
-  if (!std::filesystem::exists(st)) throw InputError(path + ": no such file");
-  if (std::filesystem::is_directory(st)) throw InputError(path + ": is a directory, not a mesh");
-  if (!std::filesystem::is_regular_file(st)) {
-    throw InputError(path + ": is a pipe or a device, not a mesh file");
-  }
+  check_plain_input(path, "mesh");
   // note: by content where the format says what it is, else by extension.
   std::string head(100, '\0');
   {

@@ -2,15 +2,16 @@
 #include "io/sample_points.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
-#include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <map>
 #include <string_view>
 
 #include "core/errors.hpp"
+#include "io/input_file.hpp"
 
 namespace dpts::io {
 namespace {
@@ -119,6 +120,7 @@ SampleSets read_sample_points(std::istream& in, const std::string& name) {
 }
 
 SampleSets read_sample_points_file(const std::string& path) {
+  check_plain_input(path, "sample-point table");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open (" + std::strerror(errno) + ")");
   return read_sample_points(in, path);

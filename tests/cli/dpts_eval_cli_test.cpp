@@ -615,6 +615,16 @@ TEST_CASE("dpts-eval answers each malformed OBJ, STL and GeoPackage in one line"
       CHECK(r.exit_code == 1);
       CHECK(r.err == "dpts-eval: error: " + path + ": " + message + "\n");
     }
+    // The same for --sample-points (with a mesh that is fine).
+    const auto mesh = simplified_mesh(fx);
+    for (const auto& [path, message] :
+         {std::pair<std::string, std::string>{dir, "is a directory, not a sample-point table"},
+          {fifo, "is a pipe or a device, not a sample-point table file"}}) {
+      const auto r =
+          test::run(kEval, {"--quiet", "--dem", fx.dem, "--mesh", mesh, "--sample-points", path});
+      CHECK(r.exit_code == 1);
+      CHECK(r.err == "dpts-eval: error: " + path + ": " + message + "\n");
+    }
   }
   for (const auto& c : cases) {
     INFO(c.name);
