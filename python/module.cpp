@@ -199,6 +199,6 @@ progress: called as progress(fraction, stage); return False to stop (dpts.Cancel
       py::arg("dem"), py::arg("mesh"), py::kw_only(), py::arg("points") = 100, py::arg("sets") = 3,
       py::arg("seed") = 1, py::arg("threads") = 0, py::arg("t_srs") = "",
       py::arg("progress") = py::none(),
-      "dpts-eval's measure of a mesh file against its DEM: a dict with distance_error and "
-      "every other figure of dpts-eval --json.");
+      "dpts-eval's measure of a mesh file (PLY, OBJ, STL or GeoPackage) against its DEM: a "
+      "dict with distance_error and every other figure of dpts-eval --json.");
 }

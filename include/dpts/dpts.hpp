@@ -75,7 +75,8 @@ struct EvaluateOptions {
   std::string t_srs;  // the mesh's CRS when the DEM was simplified with t_srs
 };
 
-// dpts-eval's figures for a mesh file (PLY) made from a DEM.
+// dpts-eval's figures for a mesh file made from a DEM: PLY, OBJ, STL (binary or ASCII) or
+// GeoPackage, as Mesh::write writes them.
 struct Evaluation {
   double distance_error = 0;       // mean over the sets of mean |GD_T - GD_T'| / GD_T
   std::vector<double> set_errors;  // per set
