@@ -537,60 +537,93 @@ void GeodesicQuery::run(Queue& queue, const SurfacePoint& source,
 // graph node there instead: the distances are those of real surface paths, much nearer the
 // geodesic than the graph's own (which bend at every edge), so far fewer Steiner points find the
 // shortest route among near ties; the path is then pulled taut exactly (geodesic_path.hpp).
+// This class holds one search's relaxations: start() from the source, relax() per settled node.
 template <typename Queue>
-void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
-                                 const std::vector<SurfacePoint>& targets, double radius,
-                                 double shell_from,
-                                 std::vector<std::pair<std::uint32_t, double>>* shell,
-                                 std::vector<double>& out, std::size_t required) {
+class GeodesicQuery::Anchored {
+ public:
+  Anchored(GeodesicQuery& q, Queue& queue, const std::vector<SurfacePoint>& targets)
+      : q_(q),
+        g_(q.g_),
+        queue_(queue),
+        targets_(targets),
+        n_(g_.node_count()),
+        nv_(static_cast<std::uint32_t>(g_.mesh().vertex_count())) {}
+
+  // The source's face: its boundary nodes and targets, straight from the source.
+  void start(const SurfacePoint& source) {
+    const double src[3] = {source.x, source.y, source.z};
+    const P3 s3 = pt(src);
+    g_.face_nodes(source.face, q_.nodes_);
+    for (std::uint32_t v : q_.nodes_) {
+      const P3 v3 = pt(g_.position(v));
+      if (improve(v, norm(sub(v3, s3)), source.face, LabelHeap::kNone)) set_anchor(v, v3, s3);
+    }
+    cx_.straight = false;
+    relax_targets(source.face, src, 0.0, LabelHeap::kNone);
+  }
+
+  // The relaxations from settled node u at distance d, its label having come through `tag`.
+  void relax(std::uint32_t u, double d, std::uint32_t tag) {
+    const double* up = g_.position(u);
+    const P3 u3 = pt(up);
+    std::uint32_t face = SteinerGraph::kNoFace;  // the face cx_ is set up for
+    cx_.straight = false;
+    g_.for_each_neighbour(
+        u, tag, [&](std::uint32_t v, std::uint32_t via) { relax_node(u, up, u3, d, v, via, face); },
+        [&](std::uint32_t f) {
+          if (u >= nv_ && f != face) {
+            cross_into(u, up, d, f);
+            face = f;
+          }
+          relax_targets(f, up, d, u);
+        });
+  }
+
+ private:
   struct P3 {
     double x, y, z;
   };
-  auto pt = [](const double* p) { return P3{p[0], p[1], p[2]}; };
-  auto sub = [](P3 a, P3 b) { return P3{a.x - b.x, a.y - b.y, a.z - b.z}; };
-  auto dot = [](P3 a, P3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; };
-  auto norm = [&](P3 a) { return std::sqrt(dot(a, a)); };
-  const double inf = std::numeric_limits<double>::infinity();
-  const std::size_t n = g_.node_count();
-  const std::uint32_t nv = static_cast<std::uint32_t>(g_.mesh().vertex_count());
-  if (anchors_.size() != n) anchors_.resize(n);
-  index_targets(targets);
-  queue.reset(n + targets.size());
-  const float kWholeEdge = std::numeric_limits<float>::infinity();
+  static P3 pt(const double* p) { return P3{p[0], p[1], p[2]}; }
+  static P3 sub(P3 a, P3 b) { return P3{a.x - b.x, a.y - b.y, a.z - b.z}; }
+  static double dot(P3 a, P3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+  static double norm(P3 a) { return std::sqrt(dot(a, a)); }
+  static constexpr double kInf = std::numeric_limits<double>::infinity();
+
   // A vertex has no anchor (lo > hi): a path through it bends there.
-  auto no_anchor = [](Anchor& an) {
+  static void no_anchor(Anchor& an) {
     an.lo = 1.0f;
     an.hi = 0.0f;
-  };
-  auto has_anchor = [](const Anchor& an) { return an.lo <= an.hi; };
+  }
+  static bool has_anchor(const Anchor& an) { return an.lo <= an.hi; }
   // Node v (at v3) gets anchor point a (offsets from v).
-  auto place = [](Anchor& an, P3 v3, P3 a) {
+  static void place(Anchor& an, P3 v3, P3 a) {
     an.off[0] = static_cast<float>(a.x - v3.x);
     an.off[1] = static_cast<float>(a.y - v3.y);
     an.off[2] = static_cast<float>(a.z - v3.z);
-  };
+  }
   // The anchor point of node u (at up).
-  auto anchor_of = [&](std::uint32_t u, const double* up) {
-    const Anchor& an = anchors_[u];
+  P3 anchor_of(std::uint32_t u, const double* up) const {
+    const Anchor& an = q_.anchors_[u];
     return P3{up[0] + an.off[0], up[1] + an.off[1], up[2] + an.off[2]};
-  };
+  }
   // The distance of anchor point a of a node at p3, at distance d: the node's less the segment.
-  auto anchor_dist = [&](P3 p3, P3 a, double d) { return d - norm(sub(p3, a)); };
+  static double anchor_dist(P3 p3, P3 a, double d) { return d - norm(sub(p3, a)); }
   // Node v (at v3) bends: its anchor is point a, seen through v's whole edge.
-  auto set_anchor = [&](std::uint32_t v, P3 v3, P3 a) {
-    Anchor& an = anchors_[v];
-    if (v < nv) return no_anchor(an);
+  void set_anchor(std::uint32_t v, P3 v3, P3 a) {
+    Anchor& an = q_.anchors_[v];
+    if (v < nv_) return no_anchor(an);
     place(an, v3, a);
     an.lo = 0.0f;
-    an.hi = kWholeEdge;
-  };
-  auto improve = [&](std::uint32_t v, double nd, std::uint32_t via, std::uint32_t from) {
-    const double old = queue.dist(v);
-    if (!(nd < old) || queue.settled_dist(v) < inf) return false;
-    if (old == inf && v < n) g_.prefetch(v);
-    queue.decrease(v, nd, via, from);
+    an.hi = std::numeric_limits<float>::infinity();
+  }
+  bool improve(std::uint32_t v, double nd, std::uint32_t via, std::uint32_t from) {
+    const double old = queue_.dist(v);
+    if (!(nd < old) || queue_.settled_dist(v) < kInf) return false;
+    if (old == kInf && v < n_) g_.prefetch(v);
+    queue_.decrease(v, nd, via, from);
     return true;
-  };
+  }
+
   // Relaxing across a Steiner node's edge (a, b) into face f (corner o): a frame in f's plane
   // (origin a, ex along the edge, ny towards o), o at (so, yo), the anchor unfolded to
   // (sa, -h) (h > 0: behind the edge), and its window [lo, hi] on the edge.
@@ -600,10 +633,12 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
     double len = 0, so = 0, yo = 0, ao = 0, bo = 0;
     double sa = 0, h = 0, da = 0, lo = 0, hi = -1;
     bool straight = false;
-  } cx;
-  // Sets cx up for node u (a Steiner point, at up, at distance d) crossing into face f;
-  // cx.straight: u has an anchor behind the edge to carry.
-  auto cross_into = [&](std::uint32_t u, const double* up, double d, std::uint32_t f) {
+  };
+
+  // Sets cx_ up for node u (a Steiner point, at up, at distance d) crossing into face f;
+  // cx_.straight: u has an anchor behind the edge to carry.
+  void cross_into(std::uint32_t u, const double* up, double d, std::uint32_t f) {
+    Crossing& cx = cx_;
     cx.straight = false;
     const auto ends = g_.node_edge_ends(u);
     cx.ia = ends[0];
@@ -623,7 +658,7 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
     // note: not std::hypot, several times slower; the lengths are far from overflow.
     cx.ao = std::sqrt(cx.so * cx.so + cx.yo * cx.yo);
     cx.bo = std::sqrt((cx.so - cx.len) * (cx.so - cx.len) + cx.yo * cx.yo);
-    const Anchor& an = anchors_[u];
+    const Anchor& an = q_.anchors_[u];
     if (!has_anchor(an)) return;
     const P3 A = anchor_of(u, up);
     const P3 r = sub(A, cx.a);
@@ -640,22 +675,26 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
     cx.lo = an.lo - tol;
     cx.hi = std::min<double>(an.hi, cx.len) + tol;
     cx.straight = true;
-  };
-  // Where the segment from cx's anchor to the point at (sp, yp) in cx's frame crosses the edge.
-  auto crossing2 = [&](double sp, double yp) { return cx.sa + (sp - cx.sa) * cx.h / (cx.h + yp); };
-  // p in cx's frame, and where its segment from the anchor crosses the edge.
-  auto crossing = [&](P3 p, double& sp, double& yp) {
-    const P3 ap = sub(p, cx.a);
-    sp = dot(ap, cx.ex);
-    yp = std::max(0.0, dot(ap, cx.ny));
+  }
+  // Where the segment from cx_'s anchor to the point at (sp, yp) in cx_'s frame crosses the
+  // edge.
+  double crossing2(double sp, double yp) const {
+    return cx_.sa + (sp - cx_.sa) * cx_.h / (cx_.h + yp);
+  }
+  // p in cx_'s frame, and where its segment from the anchor crosses the edge.
+  double crossing(P3 p, double& sp, double& yp) const {
+    const P3 ap = sub(p, cx_.a);
+    sp = dot(ap, cx_.ex);
+    yp = std::max(0.0, dot(ap, cx_.ny));
     return crossing2(sp, yp);
-  };
-  // Node v (at v3, at (sv, yv) in cx's frame, a Steiner point on edge (a, o) or (b, o) of the
-  // crossed face) is reached straight from cx's anchor: the part of its edge the anchor sees
-  // through cx's window. note: from the face's corners alone, no other record is read.
-  auto carry = [&](std::uint32_t v, P3 v3, double sv, double yv) {
-    Anchor& an = anchors_[v];
-    if (v < nv) return no_anchor(an);
+  }
+  // Node v (at v3, at (sv, yv) in cx_'s frame, a Steiner point on edge (a, o) or (b, o) of the
+  // crossed face) is reached straight from cx_'s anchor: the part of its edge the anchor sees
+  // through cx_'s window. note: from the face's corners alone, no other record is read.
+  void carry(std::uint32_t v, P3 v3, double sv, double yv) {
+    const Crossing& cx = cx_;
+    Anchor& an = q_.anchors_[v];
+    if (v < nv_) return no_anchor(an);
     // Its edge: the one v is nearer the line of; its ends in id order (as the graph keeps them).
     const double off_ao = std::fabs(sv * cx.yo - yv * cx.so) / cx.ao;
     const double off_bo = std::fabs((sv - cx.len) * cx.yo - yv * (cx.so - cx.len)) / cx.bo;
@@ -685,107 +724,111 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
     place(an, v3, cx.anchor);
     an.lo = static_cast<float>(std::min(tlo, thi) * len);
     an.hi = static_cast<float>(std::max(tlo, thi) * len);
-  };
-  // The distance to point p through cx (or bent at u, at distance d).
-  auto through = [&](const double* up, double d, P3 p) {
-    if (cx.straight) {
+  }
+  // The distance to point p through cx_ (or bent at u, at distance d).
+  double through(const double* up, double d, P3 p) const {
+    if (cx_.straight) {
       double sp, yp;
       const double c = crossing(p, sp, yp);
-      if (c >= cx.lo && c <= cx.hi) return cx.da + norm(sub(p, cx.anchor));
+      if (c >= cx_.lo && c <= cx_.hi) return cx_.da + norm(sub(p, cx_.anchor));
     }
     return d + norm(sub(p, pt(up)));
-  };
-  const double src[3] = {source.x, source.y, source.z};
-  const P3 s3 = pt(src);
-  // The source's face: its boundary nodes and targets, straight from the source.
-  g_.face_nodes(source.face, nodes_);
-  for (std::uint32_t v : nodes_) {
-    const P3 v3 = pt(g_.position(v));
-    if (improve(v, norm(sub(v3, s3)), source.face, LabelHeap::kNone)) set_anchor(v, v3, s3);
   }
-  // note: through cx where it is set up for f (a Steiner node's crossing), else bent at up.
-  auto relax_targets = [&](std::uint32_t f, const double* up, double d, std::uint32_t from) {
-    if (!(target_faces_[f >> 6] >> (f & 63) & 1)) return;
-    for (std::int32_t j = face_target_head_[f]; j >= 0; j = target_next_[j]) {
-      const P3 q{targets[j].x, targets[j].y, targets[j].z};
-      const double nd = through(up, d, q);
-      const auto v = static_cast<std::uint32_t>(n + j);
-      const double old = queue.dist(v);
-      if (nd < old && !target_done_[j]) queue.decrease(v, nd, SteinerGraph::kAnywhere, from);
+  // The targets in face f, through cx_ where it is set up for f (a Steiner node's crossing),
+  // else bent at up.
+  void relax_targets(std::uint32_t f, const double* up, double d, std::uint32_t from) {
+    if (!(q_.target_faces_[f >> 6] >> (f & 63) & 1)) return;
+    for (std::int32_t j = q_.face_target_head_[f]; j >= 0; j = q_.target_next_[j]) {
+      const P3 p{targets_[j].x, targets_[j].y, targets_[j].z};
+      const double nd = through(up, d, p);
+      const auto v = static_cast<std::uint32_t>(n_ + j);
+      const double old = queue_.dist(v);
+      if (nd < old && !q_.target_done_[j]) queue_.decrease(v, nd, SteinerGraph::kAnywhere, from);
     }
-  };
-  relax_targets(source.face, src, 0.0, LabelHeap::kNone);
+  }
+  // v (at v3, tentatively at old) bent at u (at u3, distance d): straight from u, which becomes
+  // v's anchor. note: comparing squares first skips the square root where v cannot improve.
+  void bent(std::uint32_t u, P3 u3, double d, std::uint32_t v, P3 v3, double old,
+            std::uint32_t via) {
+    const P3 uv = sub(v3, u3);
+    const double w2 = dot(uv, uv), gap = old - d;
+    if (!(gap > 0) || w2 >= gap * gap) return;
+    if (improve(v, d + std::sqrt(w2), via, u)) set_anchor(v, v3, u3);
+  }
+  // Graph node v joined to settled node u through face `via` (or along u's edge): straight from
+  // u's anchor where the window lets it, else bent at u. `face`: the face cx_ is set up for.
+  void relax_node(std::uint32_t u, const double* up, P3 u3, double d, std::uint32_t v,
+                  std::uint32_t via, std::uint32_t& face) {
+    // note: a settled node (negative in the buckets) or one at distance 0 cannot improve:
+    // skipped before its position is read.
+    const double old = queue_.dist(v);
+    if (!(old > 0)) return;
+    const P3 v3 = pt(g_.position(v));
+    if (via == SteinerGraph::kAlongEdge) {
+      // Along u's own edge: straight from u's anchor where its window holds v.
+      const Anchor& an = q_.anchors_[u];
+      if (u >= nv_ && has_anchor(an)) {
+        const auto ends = g_.node_edge_ends(u);
+        const P3 a = pt(g_.position(ends[0]));
+        const double sv = norm(sub(v3, a));
+        const double tol = 1e-7 * (sv + norm(sub(u3, a)));
+        if (sv >= an.lo - tol && sv <= an.hi + tol) {
+          const P3 A = anchor_of(u, up);
+          const double da = anchor_dist(u3, A, d);
+          if (improve(v, da + norm(sub(v3, A)), via, u) && v >= nv_) {
+            Anchor& av = q_.anchors_[v];
+            av = an;
+            place(av, v3, A);
+          }
+          return;
+        }
+      }
+      return bent(u, u3, d, v, v3, old, via);
+    }
+    if (u < nv_) return bent(u, u3, d, v, v3, old, via);
+    if (via != face) {
+      cross_into(u, up, d, via);
+      face = via;
+    }
+    if (cx_.straight) {
+      const P3 av = sub(v3, cx_.anchor);
+      // note: a node no nearer than the anchor's straight segment could bring is skipped: the
+      // segment bent at u is never shorter.
+      const double w2 = dot(av, av), gap = old - cx_.da;
+      if (!(gap > 0) || w2 >= gap * gap) return;
+      double sp, yp;
+      const double c = crossing(v3, sp, yp);
+      if (c >= cx_.lo && c <= cx_.hi) {
+        if (improve(v, cx_.da + std::sqrt(w2), via, u)) carry(v, v3, sp, yp);
+        return;
+      }
+    }
+    bent(u, u3, d, v, v3, old, via);
+  }
+
+  GeodesicQuery& q_;
+  const SteinerGraph& g_;
+  Queue& queue_;
+  const std::vector<SurfacePoint>& targets_;
+  const std::size_t n_;
+  const std::uint32_t nv_;
+  Crossing cx_;
+};
+
+template <typename Queue>
+void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
+                                 const std::vector<SurfacePoint>& targets, double radius,
+                                 double shell_from,
+                                 std::vector<std::pair<std::uint32_t, double>>* shell,
+                                 std::vector<double>& out, std::size_t required) {
+  const std::size_t n = g_.node_count();
+  if (anchors_.size() != n) anchors_.resize(n);
+  index_targets(targets);
+  queue.reset(n + targets.size());
+  Anchored<Queue> search(*this, queue, targets);
+  search.start(source);
   settle(queue, radius, shell_from, shell, required,
-         [&](std::uint32_t u, double d, std::uint32_t tag) {
-           const double* up = g_.position(u);
-           const P3 u3 = pt(up);
-           std::uint32_t face = SteinerGraph::kNoFace;  // the face cx is set up for
-           cx.straight = false;
-           // v (at v3, tentatively at old) bent at u: straight from u, which becomes v's anchor.
-           // note: comparing squares first skips the square root where v cannot improve.
-           auto bent = [&](std::uint32_t v, P3 v3, double old, std::uint32_t via) {
-             const P3 uv = sub(v3, u3);
-             const double w2 = dot(uv, uv), gap = old - d;
-             if (!(gap > 0) || w2 >= gap * gap) return;
-             if (improve(v, d + std::sqrt(w2), via, u)) set_anchor(v, v3, u3);
-           };
-           g_.for_each_neighbour(
-               u, tag,
-               [&](std::uint32_t v, std::uint32_t via) {
-                 // note: a settled node (negative in the buckets) or one at distance 0 cannot
-                 // improve: skipped before its position is read.
-                 const double old = queue.dist(v);
-                 if (!(old > 0)) return;
-                 const P3 v3 = pt(g_.position(v));
-                 if (via == SteinerGraph::kAlongEdge) {
-                   // Along u's own edge: straight from u's anchor where its window holds v.
-                   const Anchor& an = anchors_[u];
-                   if (u >= nv && has_anchor(an)) {
-                     const auto ends = g_.node_edge_ends(u);
-                     const P3 a = pt(g_.position(ends[0]));
-                     const double sv = norm(sub(v3, a));
-                     const double tol = 1e-7 * (sv + norm(sub(u3, a)));
-                     if (sv >= an.lo - tol && sv <= an.hi + tol) {
-                       const P3 A = anchor_of(u, up);
-                       const double da = anchor_dist(u3, A, d);
-                       if (improve(v, da + norm(sub(v3, A)), via, u) && v >= nv) {
-                         Anchor& av = anchors_[v];
-                         av = an;
-                         place(av, v3, A);
-                       }
-                       return;
-                     }
-                   }
-                   return bent(v, v3, old, via);
-                 }
-                 if (u < nv) return bent(v, v3, old, via);
-                 if (via != face) {
-                   cross_into(u, up, d, via);
-                   face = via;
-                 }
-                 if (cx.straight) {
-                   const P3 av = sub(v3, cx.anchor);
-                   // note: a node no nearer than the anchor's straight segment could bring is
-                   // skipped: the segment bent at u is never shorter.
-                   const double w2 = dot(av, av), gap = old - cx.da;
-                   if (!(gap > 0) || w2 >= gap * gap) return;
-                   double sp, yp;
-                   const double c = crossing(v3, sp, yp);
-                   if (c >= cx.lo && c <= cx.hi) {
-                     if (improve(v, cx.da + std::sqrt(w2), via, u)) carry(v, v3, sp, yp);
-                     return;
-                   }
-                 }
-                 bent(v, v3, old, via);
-               },
-               [&](std::uint32_t f) {
-                 if (u >= nv && f != face) {
-                   cross_into(u, up, d, f);
-                   face = f;
-                 }
-                 relax_targets(f, up, d, u);
-               });
-         });
+         [&](std::uint32_t u, double d, std::uint32_t tag) { search.relax(u, d, tag); });
   collect_targets(queue, targets, out);
 }
 

@@ -396,6 +396,9 @@ class GeodesicQuery {
   template <typename Queue>
   void collect_targets(const Queue& queue, const std::vector<SurfacePoint>& targets,
                        std::vector<double>& out);
+  // The anchored search's relaxations (steiner_graph.cpp).
+  template <typename Queue>
+  class Anchored;
   template <typename Queue>
   void run_anchored(Queue& queue, const SurfacePoint& source,
                     const std::vector<SurfacePoint>& targets, double radius, double shell_from,
