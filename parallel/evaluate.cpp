@@ -508,6 +508,41 @@ void score_set(const std::vector<double>& dt, const std::vector<double>& ds, std
   result.set_errors.push_back(sum / static_cast<double>(measured));
 }
 
+// One geodesic stage: the pairs of points on T (on_t) or T', exact or on the Steiner graph,
+// its progress reported as its sources finish (stage `name`); Cancelled when it was stopped.
+std::vector<double> geodesic_stage(const Geodesics& geo, bool on_t,
+                                   const std::vector<core::SurfacePoint>& points,
+                                   const EvalOptions& options, PairwiseMethod method,
+                                   std::size_t max_searches, const std::string& name,
+                                   const core::Progress& progress, PairwiseStats& stats) {
+  bool stop = false;  // note: written under the report lock of the pairwise call, read after it
+  const std::size_t k = points.size();
+  std::vector<double> d;
+  if (options.exact) {
+    std::function<bool(std::size_t)> on_source;
+    if (progress) {
+      // note: the exact sources take seconds each: a stop ends the stage at once
+      on_source = [&](std::size_t done) {
+        return progress(static_cast<double>(done) / static_cast<double>(k - 1), name);
+      };
+    }
+    d = exact_pairwise_distances(on_t ? *geo.exact_t : *geo.exact_s, points, on_source);
+  } else {
+    PairwiseOptions po;
+    po.method = method;
+    po.straighten = options.straighten;
+    po.max_searches = max_searches;
+    if (progress) {
+      po.on_search = [&](std::size_t searched) {
+        if (!progress(static_cast<double>(searched) / static_cast<double>(k), name)) stop = true;
+      };
+    }
+    d = pairwise_distances(on_t ? *geo.graph_t : *geo.graph_s, points, po, &stats);
+  }
+  if (stop) throw Cancelled();
+  return d;
+}
+
 }  // namespace
 
 EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh& simplified,
@@ -535,36 +570,11 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
   std::optional<core::PointLocator> locate_t;
   if (given) locate_t.emplace(original);
 
-  // One geodesic stage on T (on_t) or T', its progress reported as its sources finish.
   auto geodesics = [&](const std::string& name, bool on_t,
                        const std::vector<core::SurfacePoint>& points, PairwiseStats& stats) {
     stage(name);
-    bool stop = false;  // note: written under the report lock of the pairwise call, read after it
-    const std::size_t k = points.size();
-    std::vector<double> d;
-    if (options.exact) {
-      std::function<bool(std::size_t)> on_source;
-      if (progress) {
-        // note: the exact sources take seconds each: a stop ends the stage at once
-        on_source = [&](std::size_t done) {
-          return progress(static_cast<double>(done) / static_cast<double>(k - 1), name);
-        };
-      }
-      d = exact_pairwise_distances(on_t ? *geo.exact_t : *geo.exact_s, points, on_source);
-    } else {
-      PairwiseOptions po;
-      po.method = method;
-      po.straighten = options.straighten;
-      po.max_searches = result.max_searches;
-      if (progress) {
-        po.on_search = [&](std::size_t searched) {
-          if (!progress(static_cast<double>(searched) / static_cast<double>(k), name)) stop = true;
-        };
-      }
-      d = pairwise_distances(on_t ? *geo.graph_t : *geo.graph_s, points, po, &stats);
-    }
-    if (stop) throw Cancelled();
-    return d;
+    return geodesic_stage(geo, on_t, points, options, method, result.max_searches, name, progress,
+                          stats);
   };
   PairwiseStats stats_t, stats_s;
   double queries = 0;  // Steiner queries: one per source
