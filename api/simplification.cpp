@@ -110,6 +110,10 @@ void run_pieces(const io::DemInfo& dem, const SimplifyRequest& r, const core::Pr
     qo.tile_bytes = r.tile_bytes;
     qo.memory_limit_bytes = memory_limit(r);
     if (r.max_error) qo.max_error = *r.max_error;
+    if (r.spill) {
+      out.spilled = std::make_shared<io::SpilledMesh>();
+      qo.sink = out.spilled.get();
+    }
     out.mesh = r.qem_engine ? r.qem_engine(source, qo, progress, stats)
                             : par::simplify_qem(source, qo, progress, &stats);
   } else {
@@ -154,11 +158,15 @@ Simplification simplify(io::DemInfo dem, const std::string& input, const Simplif
       break;
   }
   // note: the TIN is built in a local affine frame; a projection far from affine could fold a
-  // sliver in the output CRS. Refuse such a mesh rather than hide it.
-  const core::MeshCheck check = core::check_mesh(core::xy_of(out.mesh.xyz), out.mesh.faces);
-  if (check.clockwise_or_flat != 0) {
-    throw InputError(input + ": " + std::to_string(check.clockwise_or_flat) +
-                     " faces would fold over in " + out.dem.output_crs_name);
+  // sliver in the output CRS. Refuse such a mesh rather than hide it. (qem's merge counts them
+  // as it writes its faces, the same test.)
+  const std::size_t folded =
+      request.algo == par::Algorithm::qem
+          ? out.pieces.folded_faces
+          : core::check_mesh(core::xy_of(out.mesh.xyz), out.mesh.faces).clockwise_or_flat;
+  if (folded != 0) {
+    throw InputError(input + ": " + std::to_string(folded) + " faces would fold over in " +
+                     out.dem.output_crs_name);
   }
   return out;
 }

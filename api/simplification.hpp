@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -13,6 +14,7 @@
 #include "core/progress.hpp"
 #include "core/raster_source.hpp"
 #include "io/dem_reader.hpp"
+#include "io/spilled_mesh.hpp"
 #include "parallel/meta.hpp"
 #include "parallel/qem_engine.hpp"
 #include "parallel/simplify.hpp"
@@ -37,6 +39,9 @@ struct SimplifyRequest {
   core::EliminationOptions elimination;  // vp, pld and the meta methods (importance from algo)
   std::size_t memory_limit_bytes = 0;    // what the run may use; 0: what is available now
   QemEngine qem_engine;                  // empty: par::simplify_qem
+  // qem: the merge writes the mesh to temporary files as it becomes final
+  // (Simplification::spilled) instead of holding it whole; the other methods ignore it.
+  bool spill = false;
   // Called once the input is known to be valid (read whole for vp, pld and qslim), before the
   // work: where a front end claims its output and prints the DEM's notes.
   std::function<void(const io::DemInfo&)> on_input;
@@ -45,6 +50,9 @@ struct SimplifyRequest {
 struct Simplification {
   io::DemInfo dem;     // the input's description, given back
   core::TriMesh mesh;  // x, y in the output CRS, heights in metres
+  // With SimplifyRequest::spill and qem: the mesh, on disk (`mesh` is then empty).
+  std::shared_ptr<io::SpilledMesh> spilled;
+  std::size_t face_count() const { return spilled ? spilled->face_count() : mesh.faces.size(); }
   std::size_t valid_cells = 0, input_vertices = 0, target_vertices = 0, kept_vertices = 0;
   // The piece engines' (qem, vp-meta, pld-meta) stages and pieces; pieces empty otherwise.
   par::MetaStats pieces;

@@ -17,6 +17,16 @@ struct TriMesh {
   std::size_t vertex_count() const { return xyz.size() / 3; }
 };
 
+// Where an engine hands a mesh over as its parts become final, instead of holding it whole
+// (the qem engine's merge): each call's vertices (x, y, z) follow those of earlier calls, and
+// its faces index all vertices handed over so far, its own included.
+class MeshSink {
+ public:
+  virtual ~MeshSink() = default;
+  virtual void add(const std::vector<double>& xyz,
+                   const std::vector<std::array<std::uint32_t, 3>>& faces) = 0;
+};
+
 // A TIN over a DEM: vertices are cells (row-major indices, ascending), faces index into
 // `cells`. Who makes one says more: the elimination's (elimination.hpp) are counter-clockwise,
 // rotated to their smallest index and sorted, and cover the valid footprint exactly once;

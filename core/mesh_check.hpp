@@ -25,6 +25,12 @@ struct MeshCheck {
 MeshCheck check_mesh(const std::vector<double>& xy,  // x0, y0, x1, y1, ...
                      const std::vector<std::array<std::uint32_t, 3>>& faces);
 
+// Twice the signed area in x, y of the triangle a, b, c (x, y, z triples): > 0 when
+// counter-clockwise. check_mesh's test of a face.
+inline double twice_area_xy(const double* a, const double* b, const double* c) {
+  return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+}
+
 // Sum of signed face areas in x, y (positive for counter-clockwise faces).
 double mesh_area(const std::vector<double>& xy,
                  const std::vector<std::array<std::uint32_t, 3>>& faces);

@@ -53,27 +53,31 @@ std::array<double, 3> unit_normal(const std::array<double, 3>& a, const std::arr
   return n;
 }
 
-void write_obj(std::ostream& out, const Mesh& mesh) {
+void write_obj(std::ostream& out, const MeshParts& mesh) {
   std::string buf;
-  for (std::string c : mesh.comments) {
+  for (std::string c : *mesh.comments) {
     std::replace(c.begin(), c.end(), '\n', ' ');
     std::replace(c.begin(), c.end(), '\r', ' ');
     buf += "# " + c + "\n";
   }
-  for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
-    buf += "v ";
-    bytes::put_xyz_line(buf, &mesh.xyz[3 * i]);
-    if (buf.size() > kChunk) flush(out, buf);
-  }
-  for (const auto& f : mesh.faces) {
-    buf += 'f';
-    for (const std::uint32_t v : f) {
-      buf += ' ';
-      put_number(buf, std::size_t{v} + 1);
+  mesh.each_vertices([&](const double* xyz, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) {
+      buf += "v ";
+      bytes::put_xyz_line(buf, &xyz[3 * i]);
+      if (buf.size() > kChunk) flush(out, buf);
     }
-    buf += '\n';
-    if (buf.size() > kChunk) flush(out, buf);
-  }
+  });
+  mesh.each_faces([&](const std::array<std::uint32_t, 3>* faces, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) {
+      buf += 'f';
+      for (const std::uint32_t v : faces[i]) {
+        buf += ' ';
+        put_number(buf, std::size_t{v} + 1);
+      }
+      buf += '\n';
+      if (buf.size() > kChunk) flush(out, buf);
+    }
+  });
   flush(out, buf);
 }
 
@@ -213,14 +217,25 @@ const char* extension_of(MeshFormat format) {
   return ".ply";
 }
 
+namespace {
+
+// PLY and OBJ, the formats written a run at a time.
+void write_runs(AtomicOutputFile& out, const MeshParts& mesh, const MeshWriteOptions& options) {
+  if (options.format == MeshFormat::ply) {
+    write_ply(out.stream(), mesh,
+              options.ascii ? PlyFormat::ascii : PlyFormat::binary_little_endian);
+  } else {
+    write_obj(out.stream(), mesh);
+  }
+}
+
+}  // namespace
+
 double write_mesh(AtomicOutputFile& out, const Mesh& mesh, const MeshWriteOptions& options) {
   switch (options.format) {
     case MeshFormat::ply:
-      write_ply(out.stream(), mesh,
-                options.ascii ? PlyFormat::ascii : PlyFormat::binary_little_endian);
-      return 0;
     case MeshFormat::obj:
-      write_obj(out.stream(), mesh);
+      write_runs(out, parts_of(mesh), options);
       return 0;
     case MeshFormat::stl:
       return write_stl(out.stream(), mesh, options.ascii);
@@ -229,6 +244,18 @@ double write_mesh(AtomicOutputFile& out, const Mesh& mesh, const MeshWriteOption
       return 0;
   }
   return 0;
+}
+
+double write_mesh(AtomicOutputFile& out, const SpilledMesh& spilled,
+                  const std::vector<std::string>& comments, const MeshWriteOptions& options) {
+  if (options.format == MeshFormat::ply || options.format == MeshFormat::obj) {
+    write_runs(out, spilled.parts(&comments), options);
+    return 0;
+  }
+  Mesh mesh;
+  static_cast<core::TriMesh&>(mesh) = spilled.load();
+  mesh.comments = comments;
+  return write_mesh(out, mesh, options);
 }
 
 }  // namespace dpts::io

@@ -40,6 +40,10 @@ struct MeshWriteOptions {
 // caller warns when that is more than the data can bear. Throws IoError naming nothing (the
 // caller names the file) when writing fails; UsageError for a stream given GeoPackage.
 double write_mesh(AtomicOutputFile& out, const Mesh& mesh, const MeshWriteOptions& options);
+// The same from a spilled mesh, with the header comments: PLY and OBJ a run at a time (the
+// same bytes, without the mesh in memory), STL and GeoPackage from the mesh read back whole.
+double write_mesh(AtomicOutputFile& out, const SpilledMesh& mesh,
+                  const std::vector<std::string>& comments, const MeshWriteOptions& options);
 
 // Reads a triangle mesh in any of the formats (io/mesh_read.cpp): PLY or GeoPackage known by
 // their first bytes, else by the extension (.obj, .stl binary or ASCII, .gpkg; PLY for any

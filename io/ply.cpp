@@ -26,38 +26,61 @@ using bytes::write_failure;
 
 }  // namespace
 
+MeshParts parts_of(const Mesh& mesh) {
+  MeshParts p;
+  p.comments = &mesh.comments;
+  p.vertices = mesh.vertex_count();
+  p.faces = mesh.faces.size();
+  p.each_vertices = [&mesh](const MeshParts::VertexRun& fn) {
+    fn(mesh.xyz.data(), mesh.vertex_count());
+  };
+  p.each_faces = [&mesh](const MeshParts::FaceRun& fn) {
+    fn(mesh.faces.data(), mesh.faces.size());
+  };
+  return p;
+}
+
 void write_ply(std::ostream& out, const Mesh& mesh, PlyFormat format) {
+  write_ply(out, parts_of(mesh), format);
+}
+
+void write_ply(std::ostream& out, const MeshParts& mesh, PlyFormat format) {
   std::string buf;
   buf += "ply\nformat ";
   buf += format == PlyFormat::ascii ? "ascii 1.0\n" : "binary_little_endian 1.0\n";
-  for (std::string c : mesh.comments) {
+  for (std::string c : *mesh.comments) {
     std::replace(c.begin(), c.end(), '\n', ' ');
     std::replace(c.begin(), c.end(), '\r', ' ');
     buf += "comment " + c + "\n";
   }
-  buf += "element vertex " + std::to_string(mesh.vertex_count()) + "\n";
+  buf += "element vertex " + std::to_string(mesh.vertices) + "\n";
   buf += "property double x\nproperty double y\nproperty double z\n";
-  buf += "element face " + std::to_string(mesh.faces.size()) + "\n";
+  buf += "element face " + std::to_string(mesh.faces) + "\n";
   buf += "property list uchar int vertex_indices\nend_header\n";
   constexpr std::size_t kChunk = bytes::kChunk;
-  for (std::size_t i = 0; i < mesh.vertex_count(); ++i) {
-    if (format == PlyFormat::ascii) {
-      bytes::put_xyz_line(buf, &mesh.xyz[3 * i]);
-    } else {
-      for (int k = 0; k < 3; ++k) put_le(buf, mesh.xyz[3 * i + k]);
+  mesh.each_vertices([&](const double* xyz, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) {
+      if (format == PlyFormat::ascii) {
+        bytes::put_xyz_line(buf, &xyz[3 * i]);
+      } else {
+        for (int k = 0; k < 3; ++k) put_le(buf, xyz[3 * i + k]);
+      }
+      if (buf.size() > kChunk) flush(out, buf);
     }
-    if (buf.size() > kChunk) flush(out, buf);
-  }
-  for (const auto& f : mesh.faces) {
-    if (format == PlyFormat::ascii) {
-      buf += "3 ";
-      bytes::put_xyz_line(buf, f.data());
-    } else {
-      buf += static_cast<char>(3);
-      for (int k = 0; k < 3; ++k) put_le(buf, static_cast<std::int32_t>(f[k]));
+  });
+  mesh.each_faces([&](const std::array<std::uint32_t, 3>* faces, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto& f = faces[i];
+      if (format == PlyFormat::ascii) {
+        buf += "3 ";
+        bytes::put_xyz_line(buf, f.data());
+      } else {
+        buf += static_cast<char>(3);
+        for (int k = 0; k < 3; ++k) put_le(buf, static_cast<std::int32_t>(f[k]));
+      }
+      if (buf.size() > kChunk) flush(out, buf);
     }
-    if (buf.size() > kChunk) flush(out, buf);
-  }
+  });
   flush(out, buf);
   out.flush();
   if (!out) throw IoError(write_failure());
@@ -325,8 +348,7 @@ void check_triangles(const Mesh& mesh, const std::string& name) {
   if (mesh.faces.empty()) throw InputError(name + ": has no faces");
   for (std::size_t i = 0; i < mesh.xyz.size(); ++i) {
     if (!std::isfinite(mesh.xyz[i])) {
-      throw InputError(name + ": vertex " + std::to_string(i / 3) +
-                       " has a non-finite coordinate");
+      throw InputError(name + ": vertex " + std::to_string(i / 3) + " has a non-finite coordinate");
     }
   }
   for (std::size_t i = 0; i < mesh.faces.size(); ++i) {

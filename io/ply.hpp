@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/mesh.hpp"
+#include "io/spilled_mesh.hpp"
 
 namespace dpts::io {
 
@@ -24,6 +25,10 @@ enum class PlyFormat { binary_little_endian, ascii };
 // use the shortest round-trip form (std::to_chars, no locale). Throws IoError if the stream
 // fails.
 void write_ply(std::ostream& out, const Mesh& mesh, PlyFormat format);
+// The same from a mesh in runs (a SpilledMesh's parts): the same bytes.
+void write_ply(std::ostream& out, const MeshParts& mesh, PlyFormat format);
+// An in-memory mesh as one run of each.
+MeshParts parts_of(const Mesh& mesh);
 
 // Reads a PLY mesh with vertex properties x, y, z (float or double, other properties
 // ignored) and triangular faces. Throws InputError naming `name` on malformed input.

@@ -59,6 +59,9 @@ struct MetaStats {
   // Bytes the pieces' kept vertices, outline edges and tails took at that point: the whole-DEM
   // state, which grows with the kept count (the rest is bounded by the pieces in flight).
   std::size_t kept_bytes = 0;
+  // qem: faces of the output not counter-clockwise in the output CRS (core::check_mesh's
+  // clockwise_or_flat), counted as the merge writes them.
+  std::size_t folded_faces = 0;
 };
 
 struct MetaResult {

@@ -17,6 +17,7 @@
 
 #include "core/errors.hpp"
 #include "core/kd_division.hpp"
+#include "core/mesh_check.hpp"
 #include "core/qem.hpp"
 #include "core/surface_sampling.hpp"
 #include "parallel/memory.hpp"
@@ -309,7 +310,369 @@ double qem_fraction(const MetaStats& st) {
   return static_cast<double>(st.target_vertices) / static_cast<double>(st.input_vertices);
 }
 
+// Whether a raster cell lies in the window of a piece at or after a given index (k-d order).
+// A window is its piece's cells and one more column and row, so a cell lies in the windows of
+// the pieces that own it and its neighbours to the left, above and above left; pieces are
+// unions of blocks, so a map from blocks to pieces finds those.
+class LaterWindows {
+ public:
+  LaterWindows(const std::vector<core::Piece>& pieces, int block, int width, int height)
+      : block_(static_cast<std::uint64_t>(std::max(1, block))),
+        bx_((static_cast<std::uint64_t>(width) + block_ - 1) / block_),
+        width_(static_cast<std::uint64_t>(width)) {
+    const std::uint64_t by = (static_cast<std::uint64_t>(height) + block_ - 1) / block_;
+    owner_.assign(bx_ * by, -1);
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+      const core::Piece& p = pieces[i];
+      const std::uint64_t c0 = static_cast<std::uint64_t>(p.col0),
+                          r0 = static_cast<std::uint64_t>(p.row0);
+      for (std::uint64_t r = r0 / block_; r * block_ < r0 + static_cast<std::uint64_t>(p.height);
+           ++r) {
+        for (std::uint64_t c = c0 / block_; c * block_ < c0 + static_cast<std::uint64_t>(p.width);
+             ++c) {
+          owner_[r * bx_ + c] = static_cast<std::int64_t>(i);
+        }
+      }
+    }
+  }
+  bool later(std::uint64_t cell, std::size_t from) const {
+    const std::uint64_t c = cell % width_, r = cell / width_;
+    for (std::uint64_t dr = 0; dr < 2; ++dr) {
+      for (std::uint64_t dc = 0; dc < 2; ++dc) {
+        if (dc > c || dr > r) continue;
+        const std::int64_t o = owner_[((r - dr) / block_) * bx_ + (c - dc) / block_];
+        if (o >= 0 && static_cast<std::size_t>(o) >= from) return true;
+      }
+    }
+    return false;
+  }
+
+ private:
+  std::uint64_t block_;
+  std::uint64_t bx_;
+  std::uint64_t width_;
+  std::vector<std::int64_t> owner_;
+};
+
+// The merge, a group of pieces at a time (qem_engine.hpp). What is open: the mesh of the
+// pieces merged so far that a later group can still change, in frame units, with per vertex
+// its quadric, raster cell, whether it lay on a window side, its x, y on the grid (reprojected
+// DEMs), and its id in the output once it is final.
+class QemSweep {
+ public:
+  QemSweep(const core::RasterSource& dem, const QemEngineOptions& options,
+           const std::vector<core::Piece>& pieces, MetaStats& st)
+      : dem_(dem),
+        options_(options),
+        positions_(dem),
+        later_(pieces, st.block, dem.width(), dem.height()),
+        st_(st) {
+    for (const core::Piece& p : pieces) total_ += static_cast<double>(p.vertices);
+    if (options.max_error > 0) {
+      bound_.emplace(dem, options.max_error);
+      cells_.emplace(dem, options.tile_bytes);
+    }
+  }
+
+  // Pieces [first, end) (their outputs emptied) stitched to what is open at their seams,
+  // collapsed together with it, and what no later piece can change written to the output.
+  // last: no piece follows.
+  void add(std::vector<QemPieceMesh>& outputs, const std::vector<core::Piece>& pieces,
+           std::size_t first, std::size_t end, const core::Progress& progress) {
+    for (std::size_t i = first; i < end; ++i) done_ += static_cast<double>(pieces[i].vertices);
+    const bool last = end == pieces.size();
+    stitch(outputs, first, end);
+    // Locked: final vertices, and those a later piece's window shares (the open boundary).
+    std::vector<char> locked(cell_.size(), 0);
+    std::size_t boundary = 0, held = 0;  // open boundary; final vertices still open
+    for (std::size_t v = 0; v < cell_.size(); ++v) {
+      const bool final_vertex = out_id_[v] != kNone;
+      const bool open = !final_vertex && seam_[v] && later_.later(cell_[v], end);
+      locked[v] = final_vertex || open;
+      boundary += open ? 1 : 0;
+      held += final_vertex ? 1 : 0;
+    }
+    // The count to reach: the target's share of the pieces merged so far, plus the part of
+    // the open boundary (full resolution, locked) that later groups will remove.
+    const double fraction = qem_fraction(st_);
+    const std::size_t want =
+        last ? st_.target_vertices
+             : static_cast<std::size_t>(
+                   std::llround(static_cast<double>(st_.target_vertices) * (done_ / total_) +
+                                (1 - std::min(1.0, fraction)) * static_cast<double>(boundary)));
+    const std::size_t dropped = written_ - held;
+    const std::size_t keep = want > dropped ? want - dropped : 0;
+    core::QemResult r = collapse(std::move(locked), boundary + held > 0, keep, progress);
+    // Per vertex data through the collapse.
+    std::vector<std::uint64_t> cell(r.source.size());
+    std::vector<char> seam(r.source.size());
+    std::vector<std::uint32_t> out_id(r.source.size());
+    std::vector<double> out_xyz(3 * r.source.size());
+    for (std::size_t v = 0; v < r.source.size(); ++v) {
+      cell[v] = cell_[r.source[v]];
+      seam[v] = seam_[r.source[v]];
+      out_id[v] = out_id_[r.source[v]];
+      std::copy_n(out_xyz_.begin() + 3 * r.source[v], 3, out_xyz.begin() + 3 * v);
+    }
+    cell_ = std::move(cell);
+    seam_ = std::move(seam);
+    out_id_ = std::move(out_id);
+    out_xyz_ = std::move(out_xyz);
+    mesh_ = std::move(r.mesh);
+    quadrics_ = std::move(r.quadrics);
+    plane_xy_ = std::move(r.plane_xy);
+    write_final(last ? std::vector<char>(cell_.size(), 1) : finals(end));
+  }
+
+  // The output: every vertex and face written (in the output CRS); empty when they went to
+  // options.sink.
+  core::TriMesh finish() { return std::move(out_); }
+  std::size_t vertices_written() const { return written_; }
+
+ private:
+  static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+  // note: how far from the open boundary (in edges of the merged mesh) vertices stay open: a
+  // later group's collapses can reach that far back into this one's, so that its seam is
+  // simplified with the vertices around it, not against a wall.
+  static constexpr int kOpenRings = 8;
+
+  // The pieces' outputs appended to what is open, seam vertices (by cell) once, their
+  // quadrics summed: every vertex's quadric is then what one whole-DEM run would have given.
+  void stitch(std::vector<QemPieceMesh>& outputs, std::size_t first, std::size_t end) {
+    std::unordered_map<std::uint64_t, std::uint32_t> seam_vertex;
+    for (std::size_t v = 0; v < cell_.size(); ++v) {
+      if (seam_[v] && out_id_[v] == kNone)
+        seam_vertex.emplace(cell_[v], static_cast<std::uint32_t>(v));
+    }
+    {
+      // Sized once: growing by doubling would briefly hold twice the merge's largest arrays.
+      std::size_t vertices = cell_.size(), faces = mesh_.faces.size();
+      for (std::size_t i = first; i < end; ++i) {
+        vertices += outputs[i].cell.size();
+        faces += outputs[i].mesh.faces.size();
+      }
+      mesh_.xyz.reserve(3 * vertices);
+      mesh_.faces.reserve(faces);
+      quadrics_.reserve(vertices);
+      if (positions_.projected) plane_xy_.reserve(2 * vertices);
+      cell_.reserve(vertices);
+      seam_.reserve(vertices);
+      out_id_.reserve(vertices);
+      out_xyz_.reserve(3 * vertices);
+    }
+    for (std::size_t i = first; i < end; ++i) {
+      QemPieceMesh& o = outputs[i];
+      std::vector<std::uint32_t> id(o.cell.size());
+      for (std::size_t v = 0; v < o.cell.size(); ++v) {
+        if (o.seam[v]) {
+          const auto [it, fresh] =
+              seam_vertex.emplace(o.cell[v], static_cast<std::uint32_t>(cell_.size()));
+          id[v] = it->second;
+          if (!fresh) {
+            quadrics_[it->second] += o.quadrics[v];
+            continue;
+          }
+        } else {
+          id[v] = static_cast<std::uint32_t>(cell_.size());
+        }
+        cell_.push_back(o.cell[v]);
+        seam_.push_back(o.seam[v]);
+        out_id_.push_back(kNone);
+        out_xyz_.insert(out_xyz_.end(), 3, 0.0);
+        mesh_.xyz.insert(mesh_.xyz.end(), o.mesh.xyz.begin() + 3 * v,
+                         o.mesh.xyz.begin() + 3 * v + 3);
+        quadrics_.push_back(o.quadrics[v]);
+        if (positions_.projected) {
+          plane_xy_.insert(plane_xy_.end(), o.plane_xy.begin() + 2 * v,
+                           o.plane_xy.begin() + 2 * v + 2);
+        }
+      }
+      for (const auto& t : o.mesh.faces) mesh_.faces.push_back({id[t[0]], id[t[1]], id[t[2]]});
+      o = {};
+    }
+  }
+
+  // What is open collapsed to `keep` vertices, the locked ones (if any) never moving.
+  core::QemResult collapse(std::vector<char> locked, bool any_locked, std::size_t keep,
+                           const core::Progress& progress) {
+    core::QemOptions qo;
+    if (any_locked) qo.locked = std::move(locked);
+    qo.quadrics = std::move(quadrics_);
+    qo.plane_xy = std::move(plane_xy_);
+    if (positions_.projected) qo.to_plane = positions_.to_plane();
+    qo.outline_collinear = positions_.collinear(&cell_, static_cast<std::uint64_t>(dem_.width()));
+    const auto chord = dem_.outline_chord_test();
+    if (chord) {
+      qo.outline_chord_ok = [this, &chord](std::uint32_t a, std::uint32_t b) {
+        return chord(cell_[a], cell_[b]);
+      };
+    }
+    if (bound_) {
+      qo.triangle_ok = [&](const double* a, const double* b, const double* c) {
+        return bound_->ok(a, b, c, 0, 0, dem_.width() - 1, dem_.height() - 1, *cells_);
+      };
+    }
+    return core::qem_simplify(std::move(mesh_), keep, std::move(qo), progress);
+  }
+
+  // Vertices no later group can change: farther than kOpenRings edges from every vertex a
+  // later piece's window shares.
+  std::vector<char> finals(std::size_t end) const {
+    const std::size_t n = cell_.size();
+    // Neighbours (CSR) from the faces.
+    std::vector<std::uint32_t> first(n + 1, 0);
+    for (const auto& t : mesh_.faces) {
+      for (const std::uint32_t v : t) first[v + 1] += 2;
+    }
+    for (std::size_t v = 0; v < n; ++v) first[v + 1] += first[v];
+    std::vector<std::uint32_t> next(first.begin(), first.end() - 1), adj(first[n]);
+    for (const auto& t : mesh_.faces) {
+      for (int k = 0; k < 3; ++k) {
+        adj[next[t[k]]++] = t[(k + 1) % 3];
+        adj[next[t[k]]++] = t[(k + 2) % 3];
+      }
+    }
+    std::vector<int> ring(n, -1);
+    std::vector<std::uint32_t> front;
+    for (std::uint32_t v = 0; v < n; ++v) {
+      if (out_id_[v] == kNone && seam_[v] && later_.later(cell_[v], end)) {
+        ring[v] = 0;
+        front.push_back(v);
+      }
+    }
+    for (int k = 1; k <= kOpenRings && !front.empty(); ++k) {
+      std::vector<std::uint32_t> grown;
+      for (const std::uint32_t v : front) {
+        for (std::uint32_t i = first[v]; i < first[v + 1]; ++i) {
+          if (ring[adj[i]] >= 0) continue;
+          ring[adj[i]] = k;
+          grown.push_back(adj[i]);
+        }
+      }
+      front = std::move(grown);
+    }
+    std::vector<char> final_vertex(n);
+    for (std::size_t v = 0; v < n; ++v) final_vertex[v] = ring[v] < 0;
+    return final_vertex;
+  }
+
+  // Final vertices get their output ids (in order) and are written; faces whose corners are
+  // all final are written (those not counter-clockwise in the output CRS counted) and leave
+  // what is open, as do final vertices left without a face.
+  void write_final(const std::vector<char>& final_vertex) {
+    const std::size_t n = cell_.size();
+    core::TriMesh batch;
+    std::vector<std::uint32_t> fresh;
+    for (std::size_t v = 0; v < n; ++v) {
+      if (!final_vertex[v] || out_id_[v] != kNone) continue;
+      out_id_[v] = static_cast<std::uint32_t>(written_++);
+      fresh.push_back(static_cast<std::uint32_t>(v));
+      batch.xyz.insert(batch.xyz.end(), mesh_.xyz.begin() + 3 * v, mesh_.xyz.begin() + 3 * v + 3);
+    }
+    positions_.to_output(batch);
+    for (std::size_t i = 0; i < fresh.size(); ++i) {
+      std::copy_n(batch.xyz.begin() + 3 * i, 3, out_xyz_.begin() + 3 * fresh[i]);
+    }
+    std::vector<char> used(n, 0);
+    std::size_t open_faces = 0;
+    for (const auto& t : mesh_.faces) {
+      if (out_id_[t[0]] != kNone && out_id_[t[1]] != kNone && out_id_[t[2]] != kNone) {
+        batch.faces.push_back({out_id_[t[0]], out_id_[t[1]], out_id_[t[2]]});
+        if (!(core::twice_area_xy(&out_xyz_[3 * t[0]], &out_xyz_[3 * t[1]], &out_xyz_[3 * t[2]]) >
+              0)) {
+          ++st_.folded_faces;
+        }
+        continue;
+      }
+      mesh_.faces[open_faces++] = t;
+      for (const std::uint32_t v : t) used[v] = 1;
+    }
+    mesh_.faces.resize(open_faces);
+    if (options_.sink) {
+      options_.sink->add(batch.xyz, batch.faces);
+    } else {
+      out_.xyz.insert(out_.xyz.end(), batch.xyz.begin(), batch.xyz.end());
+      out_.faces.insert(out_.faces.end(), batch.faces.begin(), batch.faces.end());
+    }
+    batch = {};
+    // Compact what stays open.
+    std::vector<std::uint32_t> id(n, kNone);
+    std::size_t m = 0;
+    for (std::size_t v = 0; v < n; ++v) {
+      if (!used[v]) continue;
+      id[v] = static_cast<std::uint32_t>(m);
+      std::copy_n(mesh_.xyz.begin() + 3 * v, 3, mesh_.xyz.begin() + 3 * m);
+      std::copy_n(out_xyz_.begin() + 3 * v, 3, out_xyz_.begin() + 3 * m);
+      quadrics_[m] = quadrics_[v];
+      if (positions_.projected)
+        std::copy_n(plane_xy_.begin() + 2 * v, 2, plane_xy_.begin() + 2 * m);
+      cell_[m] = cell_[v];
+      seam_[m] = seam_[v];
+      out_id_[m] = out_id_[v];
+      ++m;
+    }
+    mesh_.xyz.resize(3 * m);
+    out_xyz_.resize(3 * m);
+    quadrics_.resize(m);
+    if (positions_.projected) plane_xy_.resize(2 * m);
+    cell_.resize(m);
+    seam_.resize(m);
+    out_id_.resize(m);
+    for (auto& t : mesh_.faces) t = {id[t[0]], id[t[1]], id[t[2]]};
+    for (auto* v : {&mesh_.xyz, &plane_xy_, &out_xyz_}) v->shrink_to_fit();
+    mesh_.faces.shrink_to_fit();
+    quadrics_.shrink_to_fit();
+    cell_.shrink_to_fit();
+    seam_.shrink_to_fit();
+    out_id_.shrink_to_fit();
+  }
+
+  const core::RasterSource& dem_;
+  const QemEngineOptions& options_;
+  const Positions positions_;
+  const LaterWindows later_;
+  MetaStats& st_;
+  double total_ = 0, done_ = 0;  // surface vertices of all pieces, and of those merged
+  std::optional<VerticalBound> bound_;
+  std::optional<BlockCache> cells_;
+  core::TriMesh mesh_;
+  std::vector<core::Quadric> quadrics_;
+  std::vector<std::uint64_t> cell_;
+  std::vector<char> seam_;
+  std::vector<double> plane_xy_;
+  std::vector<std::uint32_t> out_id_;
+  std::vector<double> out_xyz_;  // a final vertex's position in the output CRS
+  std::size_t written_ = 0;      // vertices written
+  core::TriMesh out_;
+};
+
+// The merge progress of group g of `groups`: the collapse's fraction within its share.
+core::Progress group_progress(const core::Progress& progress, std::size_t g, std::size_t groups) {
+  return [&progress, g, groups](double fr, std::string_view) {
+    return !progress ||
+           progress((static_cast<double>(g) + fr) / static_cast<double>(groups), "merge");
+  };
+}
+
 }  // namespace
+
+std::vector<std::size_t> qem_groups(const std::vector<core::Piece>& pieces, double fraction,
+                                    const QemEngineOptions& options) {
+  const std::size_t budget = options.merge_bytes ? options.merge_bytes : options.tile_bytes;
+  const double per_vertex = std::min(1.0, options.slack * fraction) * kQemBytesPerKeptVertex;
+  std::vector<std::size_t> starts;
+  double held = 0;
+  for (std::size_t i = 0; i < pieces.size(); ++i) {
+    const double bytes = per_vertex * static_cast<double>(pieces[i].vertices);
+    if (starts.empty() || held + bytes > static_cast<double>(budget)) {
+      starts.push_back(i);
+      held = 0;
+    }
+    held += bytes;
+  }
+  starts.push_back(pieces.size());
+  return starts;
+}
 
 // note: the collapse's time per vertex grows with its mesh (its queue and arrays leave the
 // caches): San Gabriel resampled to 3M cells in 16 pieces of 192k, 4.5 us per cell against 3.3
@@ -322,10 +685,19 @@ std::vector<core::Piece> plan_qem(const core::RasterSource& dem, const QemEngine
   const auto bytes = options.tile_bytes;
   const std::vector<core::Piece> pieces =
       divide_dem(dem, options.keep, options.levels, bytes, 1, progress, st, kQemPieceVertices);
-  const double kept =
-      std::min(1.0, options.slack * qem_fraction(st)) * static_cast<double>(st.input_vertices);
+  // The merge holds one group's kept vertices (and the open band before it) and the output.
+  const double fraction = std::min(1.0, options.slack * qem_fraction(st));
+  const std::vector<std::size_t> groups = qem_groups(pieces, qem_fraction(st), options);
+  double group = 0;
+  for (std::size_t g = 0; g + 1 < groups.size(); ++g) {
+    double n = 0;
+    for (std::size_t i = groups[g]; i < groups[g + 1]; ++i)
+      n += static_cast<double>(pieces[i].vertices);
+    group = std::max(group, n * fraction);
+  }
   check_memory(dem, st.target_vertices,
-               static_cast<std::size_t>(kept * kQemBytesPerKeptVertex) +
+               static_cast<std::size_t>(group * kQemBytesPerKeptVertex) +
+                   st.target_vertices * kQemBytesPerOutputVertex +
                    pieces_in_flight_bytes(pieces, 1, bytes),
                options.memory_limit_bytes);
   return pieces;
@@ -362,95 +734,55 @@ core::TriMesh simplify_qem(const core::RasterSource& dem, const QemEngineOptions
   MetaStats& st = stats ? *stats : local;
   // 1. Count surface vertices per block, streaming; divide.
   const std::vector<core::Piece> pieces = plan_qem(dem, options, progress, st);
-  // 2. Simplify the pieces concurrently, seams locked.
-  auto t0 = std::chrono::steady_clock::now();
-  std::vector<std::size_t> all(pieces.size());
-  for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+  // 2 and 3, a group of pieces at a time: simplify its pieces concurrently, seams locked; then
+  // stitch them to what is open and collapse on.
+  const std::vector<std::size_t> groups = qem_groups(pieces, qem_fraction(st), options);
+  QemSweep sweep(dem, options, pieces, st);
   std::vector<QemPieceMesh> outputs;
-  simplify_qem_pieces(dem, options, pieces, all, st, outputs, progress);
-  st.simplify_s = seconds_since(t0);
-  // 3. Stitch at the seams, then collapse on to the target.
-  return merge_qem(dem, options, outputs, st, progress);
+  const double all = static_cast<double>(std::max<std::size_t>(1, pieces.size()));
+  for (std::size_t g = 0; g + 1 < groups.size(); ++g) {
+    const std::size_t first = groups[g], end = groups[g + 1];
+    std::vector<std::size_t> which(end - first);
+    for (std::size_t i = first; i < end; ++i) which[i - first] = i;
+    const auto t0 = std::chrono::steady_clock::now();
+    simplify_qem_pieces(
+        dem, options, pieces, which, st, outputs, [&](double fr, std::string_view s) {
+          const double f =
+              (static_cast<double>(first) + fr * static_cast<double>(end - first)) / all;
+          return !progress || progress(f, s);
+        });
+    st.simplify_s += seconds_since(t0);
+    if (g == 0) st.peak_rss_before_merge_kb = peak_rss_kb();
+    for (std::size_t i = first; i < end; ++i) st.kept_bytes += outputs[i].bytes();
+    const auto t1 = std::chrono::steady_clock::now();
+    if (progress && !progress(static_cast<double>(g) / (groups.size() - 1), "merge")) {
+      throw Cancelled();
+    }
+    sweep.add(outputs, pieces, first, end, group_progress(progress, g, groups.size() - 1));
+    st.merge_s += seconds_since(t1);
+  }
+  st.kept_vertices = sweep.vertices_written();
+  return sweep.finish();
 }
 
 core::TriMesh merge_qem(const core::RasterSource& dem, const QemEngineOptions& options,
-                        std::vector<QemPieceMesh>& outputs, MetaStats& st,
-                        const core::Progress& progress) {
-  const auto bytes = options.tile_bytes;
-  const Positions positions(dem);
+                        const std::vector<core::Piece>& pieces, std::vector<QemPieceMesh>& outputs,
+                        MetaStats& st, const core::Progress& progress) {
   st.peak_rss_before_merge_kb = peak_rss_kb();
   for (const auto& o : outputs) st.kept_bytes += o.bytes();
-
-  // Stitch at the seams (in k-d order), then collapse on to the target in one order.
-  auto t0 = std::chrono::steady_clock::now();
-  if (progress && !progress(0.0, "merge")) throw Cancelled();
-  core::TriMesh merged;
-  core::QemOptions qo;
-  std::vector<std::uint64_t> cell;
-  std::unordered_map<std::uint64_t, std::uint32_t> seam_vertex;
-  {
-    // Sized once: growing by doubling would briefly hold twice the merge's largest arrays.
-    std::size_t vertices = 0, faces = 0;
-    for (const QemPieceMesh& o : outputs) vertices += o.cell.size(), faces += o.mesh.faces.size();
-    merged.xyz.reserve(3 * vertices);
-    merged.faces.reserve(faces);
-    qo.quadrics.reserve(vertices);
-    if (positions.projected) qo.plane_xy.reserve(2 * vertices);
-    cell.reserve(vertices);
-  }
-  for (QemPieceMesh& o : outputs) {
-    std::vector<std::uint32_t> id(o.cell.size());
-    for (std::size_t v = 0; v < o.cell.size(); ++v) {
-      if (o.seam[v]) {
-        const auto [it, fresh] =
-            seam_vertex.emplace(o.cell[v], static_cast<std::uint32_t>(cell.size()));
-        id[v] = it->second;
-        if (!fresh) {
-          qo.quadrics[it->second] += o.quadrics[v];
-          continue;
-        }
-      } else {
-        id[v] = static_cast<std::uint32_t>(cell.size());
-      }
-      cell.push_back(o.cell[v]);
-      merged.xyz.insert(merged.xyz.end(), o.mesh.xyz.begin() + 3 * v,
-                        o.mesh.xyz.begin() + 3 * v + 3);
-      qo.quadrics.push_back(o.quadrics[v]);
-      if (positions.projected) {
-        qo.plane_xy.insert(qo.plane_xy.end(), o.plane_xy.begin() + 2 * v,
-                           o.plane_xy.begin() + 2 * v + 2);
-      }
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<std::size_t> groups = qem_groups(pieces, qem_fraction(st), options);
+  QemSweep sweep(dem, options, pieces, st);
+  for (std::size_t g = 0; g + 1 < groups.size(); ++g) {
+    if (progress && !progress(static_cast<double>(g) / (groups.size() - 1), "merge")) {
+      throw Cancelled();
     }
-    for (const auto& t : o.mesh.faces) merged.faces.push_back({id[t[0]], id[t[1]], id[t[2]]});
-    o = {};
+    sweep.add(outputs, pieces, groups[g], groups[g + 1],
+              group_progress(progress, g, groups.size() - 1));
   }
-  seam_vertex = {};
-  if (positions.projected) qo.to_plane = positions.to_plane();
-  qo.outline_collinear = positions.collinear(&cell, static_cast<std::uint64_t>(dem.width()));
-  const auto chord = dem.outline_chord_test();
-  if (chord) {
-    qo.outline_chord_ok = [&cell, &chord](std::uint32_t a, std::uint32_t b) {
-      return chord(cell[a], cell[b]);
-    };
-  }
-  std::optional<VerticalBound> bound;
-  std::optional<BlockCache> cells;
-  if (options.max_error > 0) {
-    bound.emplace(dem, options.max_error);
-    cells.emplace(dem, bytes);
-    qo.triangle_ok = [&](const double* a, const double* b, const double* c) {
-      return bound->ok(a, b, c, 0, 0, dem.width() - 1, dem.height() - 1, *cells);
-    };
-  }
-  const core::Progress merge_progress = [&](double fr, std::string_view) {
-    return !progress || progress(fr, "merge");
-  };
-  core::QemResult r =
-      core::qem_simplify(std::move(merged), st.target_vertices, std::move(qo), merge_progress);
-  st.kept_vertices = r.mesh.vertex_count();
-  positions.to_output(r.mesh);
+  st.kept_vertices = sweep.vertices_written();
   st.merge_s = seconds_since(t0);
-  return std::move(r.mesh);
+  return sweep.finish();
 }
 
 namespace {

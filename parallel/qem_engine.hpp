@@ -11,7 +11,17 @@
 //  3. The merge stitches the pieces at their seam vertices (identical cells), sums those
 //     vertices' quadrics (so every vertex's quadric is what one whole-DEM run would have
 //     given), unlocks the seams and goes on collapsing to the target: the seams vanish, and
-//     the last collapses follow one global cost order, not per-piece budgets.
+//     the last collapses follow one cost order, not per-piece budgets.
+// The merge takes the pieces in groups (consecutive in k-d order) whose kept vertices fit the
+// tile budget: a DEM whose kept vertices all fit is one group, merged as above. Otherwise
+// steps 2 and 3 run a group at a time, and the memory the merge holds no longer grows with
+// the DEM (the output mesh going to options.sink): each group's pieces are simplified, stitched to
+// what is still open of the groups before, and collapsed with it down to the target's share of the
+// pieces merged so far (the last group: the target), the vertices a later piece's window
+// shares locked. Then every vertex more than a few edges from those is final: it is
+// written to the output with the faces whose corners are all final, and leaves the merge.
+// The band left open lets the next group simplify the seam between them with the vertices
+// around it; across groups the budget follows the pieces' sizes, within one the cost order.
 // With a vertical bound (--max-error) every new triangle is tested against the valid cell
 // centres it covers: in a piece from its window, in the merge from the DEM read again block
 // by block through a cache of at most one tile.
@@ -44,6 +54,12 @@ struct QemEngineOptions {
   // The vertical error at every valid cell centre stays <= max_error metres (0: no bound);
   // the count may then stay above the target.
   double max_error = 0;
+  // The merge's budget for one group's kept vertices (bytes, at kQemBytesPerKeptVertex);
+  // 0: tile_bytes.
+  std::size_t merge_bytes = 0;
+  // Where the merge writes the mesh as its parts become final (in the output CRS); the engine
+  // then returns an empty mesh. Null: the engine returns the mesh.
+  core::MeshSink* sink = nullptr;
   // Refuse (InputError, with the estimate) a run estimated to need more memory; 0: no check.
   std::size_t memory_limit_bytes = 0;
 };
@@ -51,6 +67,14 @@ struct QemEngineOptions {
 // Bytes the qem engine holds per kept vertex in the merge (the pieces' outputs and the merged
 // mesh being collapsed), measured with some margin.
 inline constexpr std::size_t kQemBytesPerKeptVertex = 700;
+// Bytes of the output mesh per vertex (its coordinates and about two faces).
+inline constexpr std::size_t kQemBytesPerOutputVertex = 64;
+
+// The merge's groups of pieces (qem_engine.hpp's note): group g is pieces [starts[g],
+// starts[g + 1]); the last entry is pieces.size(). fraction: the target over the surface
+// vertices. Depends on the pieces and options alone (not on the threads).
+std::vector<std::size_t> qem_groups(const std::vector<core::Piece>& pieces, double fraction,
+                                    const QemEngineOptions& options);
 
 // What a piece hands to the merge: its simplified mesh (frame units), and per vertex its
 // quadric, its raster cell (where it started), whether it lies on a seam (shared with another
@@ -70,8 +94,9 @@ struct QemPieceMesh {
 };
 
 // Runs the engine on band 1. The mesh is in the output CRS (heights in metres), faces
-// counter-clockwise. stats gets the counts, the pieces (value 0) and
-// the stage times. Progress stages "count", "simplify", "merge"; false stops with Cancelled.
+// counter-clockwise; with options.sink it goes there, and the mesh returned is empty. stats gets
+// the counts, the pieces (value 0) and the stage times. Progress stages "count", "simplify",
+// "merge"; false stops with Cancelled.
 core::TriMesh simplify_qem(const core::RasterSource& dem, const QemEngineOptions& options,
                            const core::Progress& progress, MetaStats* stats = nullptr);
 
@@ -88,11 +113,11 @@ void simplify_qem_pieces(const core::RasterSource& dem, const QemEngineOptions& 
                          const std::vector<core::Piece>& pieces,
                          const std::vector<std::size_t>& which, MetaStats& st,
                          std::vector<QemPieceMesh>& outputs, const core::Progress& progress);
-// 3. All pieces' outputs (emptied) stitched at the seams in piece order and collapsed on to
-// the target: the mesh in the output CRS. Progress stage "merge".
+// 3. All pieces' outputs (emptied) stitched at the seams and collapsed on to the target, a
+// group at a time as simplify_qem does: the mesh in the output CRS. Progress stage "merge".
 core::TriMesh merge_qem(const core::RasterSource& dem, const QemEngineOptions& options,
-                        std::vector<QemPieceMesh>& outputs, MetaStats& st,
-                        const core::Progress& progress);
+                        const std::vector<core::Piece>& pieces, std::vector<QemPieceMesh>& outputs,
+                        MetaStats& st, const core::Progress& progress);
 
 // A piece's output and report as bytes for another process of the same build, and back;
 // from_bytes throws std::runtime_error on bytes that are not one.

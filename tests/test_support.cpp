@@ -8,6 +8,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+extern char** environ;
+
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <chrono>
@@ -123,6 +125,18 @@ RunResult run(const std::string& exe, const std::vector<std::string>& args,
               const RunOptions& options) {
   TempDir io;
   const auto out_path = io / "stdout", err_path = io / "stderr";
+  // The child's environment, made before the fork.
+  std::vector<std::string> env_strings;
+  for (char** e = environ; *e != nullptr; ++e) {
+    const std::string entry = *e;
+    bool replaced = false;
+    for (const auto& [name, value] : options.env) replaced |= entry.rfind(name + "=", 0) == 0;
+    if (!replaced) env_strings.push_back(entry);
+  }
+  for (const auto& [name, value] : options.env) env_strings.push_back(name + "=" + value);
+  std::vector<char*> envp;
+  for (auto& e : env_strings) envp.push_back(e.data());
+  envp.push_back(nullptr);
   const pid_t pid = ::fork();
   if (pid == 0) {
     const int out = options.stdout_to.empty()
@@ -155,7 +169,7 @@ RunResult run(const std::string& exe, const std::vector<std::string>& args,
     argv.push_back(const_cast<char*>(exe.c_str()));
     for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
-    ::execv(exe.c_str(), argv.data());
+    ::execve(exe.c_str(), argv.data(), envp.data());
     ::_exit(127);
   }
   int status = 0;

@@ -48,17 +48,19 @@ struct RunResult {
 
 // How to run a child: limits and an interruption.
 struct RunOptions {
-  std::size_t file_size_limit = 0;  // RLIMIT_FSIZE in bytes (0: none); SIGXFSZ ignored, so a
-                                    // write past it fails like one to a full disk
-  std::string signal_when;          // send `signal` once stderr contains this text...
-  double signal_after_s = 0;        // ...or once this many seconds have passed (0: never)
-  int signal = 15;                  // SIGTERM
-  std::string stdout_to;            // a file stdout goes to (e.g. /dev/full), not captured
-  std::string stdin_from;           // a file stdin reads (empty: /dev/null)
-  std::string cwd;                  // the child's working folder (empty: ours)
-  bool close_stderr = false;        // start the child with descriptor 2 closed (2>&-)
+  std::size_t file_size_limit = 0;      // RLIMIT_FSIZE in bytes (0: none); SIGXFSZ ignored, so a
+                                        // write past it fails like one to a full disk
+  std::string signal_when;              // send `signal` once stderr contains this text...
+  double signal_after_s = 0;            // ...or once this many seconds have passed (0: never)
+  int signal = 15;                      // SIGTERM
+  std::string stdout_to;                // a file stdout goes to (e.g. /dev/full), not captured
+  std::string stdin_from;               // a file stdin reads (empty: /dev/null)
+  std::string cwd;                      // the child's working folder (empty: ours)
+  bool close_stderr = false;            // start the child with descriptor 2 closed (2>&-)
   std::size_t address_space_limit = 0;  // RLIMIT_AS in bytes (0: none)
   int cpu_limit_s = 0;  // RLIMIT_CPU's soft limit (0: none): SIGXCPU kills past it (no core)
+  // Environment variables set (NAME, value) in the child only, over ours.
+  std::vector<std::pair<std::string, std::string>> env;
 };
 
 // A file's bytes ("" when it cannot be read); a FIFO is read to its end.

@@ -211,8 +211,11 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
   add("empty INPUT name", {"", out}, 2, "INPUT is an empty name");
   add("output folder missing", {fine, path("no/such/dir/out.ply")}, 1,
       path("no/such/dir/out.ply") + ": cannot create output");
+  // note: 20 vertices, so that the mesh's temporary files (qem) stay under the limit and the
+  // output is what fills it (a full TMPDIR: dpts_par_cli_test.cpp).
   cases.push_back({"disk full while writing (1 kB file size limit)",
-                   {"--ascii", fine, out}, 1, out + ": write failed (File too large)", "", 1024});
+                   {"--ascii", "--vertices", "20", fine, out}, 1,
+                   out + ": write failed (File too large)", "", 1024});
 
   // Strange but valid: each must succeed and write its output.
   auto ok = [&](std::string what, std::vector<std::string> args, std::string msg = "") {

@@ -179,8 +179,7 @@ TEST_CASE("output bytes are identical for 1, 2 and 4 threads", "[cli][determinis
     const auto out = (fx.dir / ("t" + t + ".ply")).string();
     INFO(algo << ", threads " << t);
     // --tile-mb 1: the meta engine works on several pieces at once.
-    const auto r =
-        test::run(kExe, {"--algo", algo, "--tile-mb", "1", "--threads", t, fx.dem, out});
+    const auto r = test::run(kExe, {"--algo", algo, "--tile-mb", "1", "--threads", t, fx.dem, out});
     INFO(r.err);  // a sanitizer's report (TSan exits 66) is in the child's stderr
     REQUIRE(r.exit_code == 0);
     std::ifstream in(out, std::ios::binary);
@@ -295,6 +294,33 @@ TEST_CASE("an output path that cannot be written fails, naming the output", "[cl
   const auto r = test::run(kExe, {fx.dem, out});
   CHECK(r.exit_code == 1);
   CHECK(r.err.rfind("dpts-par: error: " + out + ": cannot create output", 0) == 0);
+  CHECK(fx.dir.files() == std::vector<std::string>{"dem.tif"});
+}
+
+TEST_CASE("qem's mesh goes to TMPDIR as it is made: a folder that cannot take it fails the run",
+          "[cli][spill]") {
+  Fixture fx;
+  const auto out = (fx.dir / "out.ply").string();
+  SECTION("a folder that does not exist") {
+    test::RunOptions o;
+    o.env = {{"TMPDIR", (fx.dir / "none").string()}};
+    const auto r = test::run(kExe, {"--quiet", fx.dem, out}, o);
+    CHECK(r.exit_code == 1);
+    CHECK(r.err == "dpts-par: error: temporary file in " + (fx.dir / "none").string() +
+                       ": cannot create (No such file or directory)\n");
+  }
+  SECTION("a full one (a file size limit stands in)") {
+    test::RunOptions o;
+    o.env = {{"TMPDIR", fx.dir.path().string()}};
+    o.file_size_limit = 4096;
+    const auto r = test::run(kExe, {"--quiet", "--keep", "50%", fx.dem, out}, o);
+    CHECK(r.exit_code == 1);
+    CHECK(r.err.rfind("dpts-par: error: temporary file in " + fx.dir.path().string() +
+                          ": write failed (File too large)",
+                      0) == 0);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  }
+  // No output, and nothing left behind in the folder.
   CHECK(fx.dir.files() == std::vector<std::string>{"dem.tif"});
 }
 
@@ -648,10 +674,11 @@ TEST_CASE("a rotated DEM's vertices are its cell centres and its TIN covers its 
   const int w = 25, h = 18;
   // Cells 10 m square, rotated by atan(6/8) (about 36.9 degrees).
   const std::vector<double> gt = {400000, 8, 6, 3800000, 6, -8};
-  test::write_geotiff(dem, test::make_grid(w, h, [](int c, int r) {
-                        return 100.0 + 20.0 * std::sin(0.3 * c) + 2.0 * r;
-                      }),
-                      gt, test::epsg_wkt(32611));
+  test::write_geotiff(
+      dem,
+      test::make_grid(w, h,
+                      [](int c, int r) { return 100.0 + 20.0 * std::sin(0.3 * c) + 2.0 * r; }),
+      gt, test::epsg_wkt(32611));
   const auto out = (dir / "out.ply").string();
   for (const std::string algo : {"vp", "vp-meta", "qslim", "qem"}) {
     INFO(algo);

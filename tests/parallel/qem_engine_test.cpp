@@ -39,11 +39,14 @@ struct Fixture {
   }
 };
 
-par::QemEngineOptions options(std::size_t keep) {
+// A tile of 64 kB: the merge takes the pieces a group at a time (several groups), unless
+// merge_bytes lets one group hold them all.
+par::QemEngineOptions options(std::size_t keep, std::size_t merge_bytes = 0) {
   par::QemEngineOptions o;
   o.keep.vertices = keep;
   o.levels = 4;
   o.tile_bytes = 64 << 10;
+  o.merge_bytes = merge_bytes;
   return o;
 }
 
@@ -63,14 +66,27 @@ void check_cover(const core::TriMesh& m, double area) {
 TEST_CASE("qem's piece engine keeps the count and covers the footprint once across seams",
           "[parallel][qem]") {
   const bool geographic = GENERATE(false, true);
-  INFO((geographic ? "geographic" : "projected"));
+  const std::size_t merge_bytes = GENERATE(std::size_t{0}, std::size_t{1} << 30);
+  INFO((geographic ? "geographic" : "projected") << ", merge bytes " << merge_bytes);
   Fixture fx(geographic);
   for (double share : {0.3, 0.1}) {
     par::MetaStats stats;
     const std::size_t keep = static_cast<std::size_t>(share * 6000);
     const core::TriMesh m =
-        par::simplify_qem(io::GdalRaster(fx.info), options(keep), nullptr, &stats);
+        par::simplify_qem(io::GdalRaster(fx.info), options(keep, merge_bytes), nullptr, &stats);
     CHECK(stats.pieces.size() >= 16);
+    // One group, or several: the kept vertices of the pieces (700 bytes each at 1.3 x the
+    // share) do not fit 64 kB.
+    std::vector<core::Piece> pieces;
+    for (const auto& p : stats.pieces) pieces.push_back(p.piece);
+    const auto groups = par::qem_groups(pieces, share, options(keep, merge_bytes));
+    CHECK(groups.front() == 0);
+    CHECK(groups.back() == pieces.size());
+    if (merge_bytes) {
+      CHECK(groups.size() == 2);
+    } else {
+      CHECK(groups.size() > 4);
+    }
     CHECK(m.vertex_count() == keep);
     CHECK(stats.kept_vertices == keep);
     std::size_t kept = 0;
@@ -90,10 +106,11 @@ TEST_CASE("qem's piece engine keeps the count and covers the footprint once acro
 TEST_CASE("qem's piece engine gives the same mesh for 1, 2 and 4 threads",
           "[parallel][qem][determinism]") {
   Fixture fx(false);
+  const std::size_t merge_bytes = GENERATE(std::size_t{0}, std::size_t{1} << 30);
   auto run = [&](int threads) {
     tbb::global_control c(tbb::global_control::max_allowed_parallelism,
                           static_cast<std::size_t>(threads));
-    return par::simplify_qem(io::GdalRaster(fx.info), options(600), nullptr);
+    return par::simplify_qem(io::GdalRaster(fx.info), options(600, merge_bytes), nullptr);
   };
   const core::TriMesh a = run(1);
   for (int threads : {2, 4}) {

@@ -1,0 +1,124 @@
+// SpilledMesh: two unnamed temporary files.
+#include "io/spilled_mesh.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+
+#include "core/errors.hpp"
+#include "io/byte_writer.hpp"
+
+namespace dpts::io {
+namespace {
+
+// A file made and unlinked at once in dir: its space is given back when it is closed, however
+// the process ends.
+std::FILE* unnamed_file(const std::string& dir) {
+  std::string name = (std::filesystem::path(dir) / "dpts-mesh-XXXXXX").string();
+  const int fd = mkstemp(name.data());
+  if (fd < 0) {
+    throw IoError("temporary file in " + dir + ": cannot create (" + std::strerror(errno) + ")");
+  }
+  unlink(name.c_str());
+  std::FILE* f = fdopen(fd, "w+b");
+  if (f == nullptr) {
+    close(fd);
+    throw IoError("temporary file in " + dir + ": cannot open (" + std::strerror(errno) + ")");
+  }
+  return f;
+}
+
+constexpr std::size_t kRunBytes = std::size_t{1} << 20;
+
+}  // namespace
+
+SpilledMesh::SpilledMesh() {
+  const char* tmp = std::getenv("TMPDIR");
+  dir_ = tmp != nullptr && *tmp != '\0' ? tmp : "/tmp";
+  xyz_ = unnamed_file(dir_);
+  try {
+    faces_file_ = unnamed_file(dir_);
+  } catch (...) {
+    std::fclose(xyz_);
+    throw;
+  }
+}
+
+SpilledMesh::~SpilledMesh() {
+  std::fclose(xyz_);
+  std::fclose(faces_file_);
+}
+
+void SpilledMesh::add(const std::vector<double>& xyz,
+                      const std::vector<std::array<std::uint32_t, 3>>& faces) {
+  errno = 0;
+  if (std::fwrite(xyz.data(), sizeof(double), xyz.size(), xyz_) != xyz.size() ||
+      std::fwrite(faces.data(), sizeof(faces[0]), faces.size(), faces_file_) != faces.size() ||
+      std::fflush(xyz_) != 0 || std::fflush(faces_file_) != 0) {
+    throw IoError("temporary file in " + dir_ + ": " + bytes::write_failure());
+  }
+  vertices_ += xyz.size() / 3;
+  faces_ += faces.size();
+}
+
+void SpilledMesh::read_all(std::FILE* f, std::size_t records, std::size_t record_bytes,
+                           const std::function<void(const char*, std::size_t)>& fn) const {
+  errno = 0;
+  if (std::fflush(f) != 0 || std::fseek(f, 0, SEEK_SET) != 0) {
+    throw IoError("temporary file in " + dir_ + ": " + bytes::write_failure());
+  }
+  const std::size_t per_run = std::max<std::size_t>(1, kRunBytes / record_bytes);
+  std::vector<char> run(per_run * record_bytes);
+  while (records > 0) {
+    const std::size_t n = std::min(records, per_run);
+    if (std::fread(run.data(), record_bytes, n, f) != n) {
+      throw IoError("temporary file in " + dir_ + ": read failed");
+    }
+    fn(run.data(), n);
+    records -= n;
+  }
+  std::fseek(f, 0, SEEK_END);  // later adds append
+}
+
+MeshParts SpilledMesh::parts(const std::vector<std::string>* comments) const {
+  MeshParts p;
+  p.comments = comments;
+  p.vertices = vertices_;
+  p.faces = faces_;
+  p.each_vertices = [this](const MeshParts::VertexRun& fn) {
+    std::vector<double> v;
+    read_all(xyz_, vertices_, 3 * sizeof(double), [&](const char* data, std::size_t n) {
+      v.resize(3 * n);
+      std::memcpy(v.data(), data, 3 * n * sizeof(double));
+      fn(v.data(), n);
+    });
+  };
+  p.each_faces = [this](const MeshParts::FaceRun& fn) {
+    std::vector<std::array<std::uint32_t, 3>> t;
+    read_all(faces_file_, faces_, sizeof(t[0]), [&](const char* data, std::size_t n) {
+      t.resize(n);
+      std::memcpy(t.data(), data, n * sizeof(t[0]));
+      fn(t.data(), n);
+    });
+  };
+  return p;
+}
+
+core::TriMesh SpilledMesh::load() const {
+  core::TriMesh m;
+  m.xyz.reserve(3 * vertices_);
+  m.faces.reserve(faces_);
+  const MeshParts p = parts(nullptr);
+  p.each_vertices(
+      [&](const double* xyz, std::size_t n) { m.xyz.insert(m.xyz.end(), xyz, xyz + 3 * n); });
+  p.each_faces([&](const std::array<std::uint32_t, 3>* f, std::size_t n) {
+    m.faces.insert(m.faces.end(), f, f + n);
+  });
+  return m;
+}
+
+}  // namespace dpts::io
