@@ -80,8 +80,10 @@ standard input (GDAL's /vsistdin/).
                        the UTM zone of its centre if geographic
   --threads N          worker threads (default: all cores)
   --tile-mb M          vp-meta/pld-meta/qem: memory budget of one piece in MB (default 256);
-                       peak memory is about threads x M plus the kept vertices. vp and pld
-                       read the whole DEM
+                       qem's peak memory is about threads x M whatever the DEM's size (its
+                       merge takes one M of pieces at a time, and its mesh goes to TMPDIR
+                       as it is made); vp-meta/pld-meta's, that plus the kept vertices. vp
+                       and pld read the whole DEM
   --band B             the band holding the heights (default 1)
   --max-memory MB      refuse, before reading the heights, a run estimated to need more
                        memory than MB (default: the memory available when it starts)

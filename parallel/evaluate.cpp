@@ -186,6 +186,83 @@ std::vector<double> meeting_radii(const std::vector<double>& c, std::size_t k) {
 // thread, up to two more each, waiting for their joins, so that a thread rarely idles.
 std::size_t unbounded_searches(std::size_t threads) { return 3 * threads - 1; }
 
+// The first `pilots` points searched in full (in parallel), their distances into direct and
+// their searches' sizes into settled_by: the estimate the meeting radii need, the largest ratio
+// of geodesic to straight-line distance over the farther half of each one's pairs.
+double search_pilots(const core::SteinerGraph& graph, const std::vector<core::SurfacePoint>& points,
+                     std::size_t pilots, std::vector<double>& direct,
+                     std::vector<std::size_t>& settled_by, const std::function<void()>& searched) {
+  const std::size_t k = points.size();
+  std::vector<double> pilot_ratio(pilots, 1.0);
+  tbb::parallel_for(std::size_t{0}, pilots, [&](std::size_t p) {
+    core::GeodesicQuery q(graph);
+    std::vector<core::SurfacePoint> targets;
+    for (std::size_t j = 0; j < k; ++j) {
+      if (j != p) targets.push_back(points[j]);
+    }
+    std::vector<double> d;
+    q.distances(points[p], targets, d);
+    settled_by[p] = q.settled();
+    std::vector<std::pair<double, double>> far;  // (straight, geodesic)
+    for (std::size_t j = 0, t = 0; j < k; ++j) {
+      if (j == p) continue;
+      direct[p * k + j] = d[t];
+      far.emplace_back(std::sqrt(straight2(points, p, j)), d[t]);
+      ++t;
+    }
+    std::sort(far.begin(), far.end());
+    for (std::size_t t = far.size() / 2; t < far.size(); ++t) {
+      if (far[t].first > 0 && std::isfinite(far[t].second)) {
+        pilot_ratio[p] = std::max(pilot_ratio[p], far[t].second / far[t].first);
+      }
+    }
+    if (searched) searched();
+  });
+  return *std::max_element(pilot_ratio.begin(), pilot_ratio.end());
+}
+
+// The radius each non-pilot point is searched to (meeting_radii), from the pilots' ratio of
+// geodesic to straight-line distance and the longest segment w; the pilots' are unused.
+std::vector<double> search_radii(const std::vector<core::SurfacePoint>& points, std::size_t pilots,
+                                 double ratio, double w) {
+  const std::size_t k = points.size();
+  std::vector<double> c(k * k, 0.0);
+  for (std::size_t i = pilots; i < k; ++i) {
+    for (std::size_t j = pilots; j < k; ++j) {
+      if (j != i) c[i * k + j] = 1.05 * ratio * std::sqrt(straight2(points, i, j)) + w;
+    }
+  }
+  return meeting_radii(c, k);
+}
+
+// Each pair a < b's distance into out: from either one's search where it settled the other,
+// else their join where it proves itself exact (within both radii less the longest segment
+// w); the pairs neither gives are marked in left, and counted.
+// note: every value comes from searches and joins whose results do not depend on the thread
+// count, chosen by a fixed rule, so the figures are the same for any --threads.
+std::size_t settle_pairs(const std::vector<double>& direct, const std::vector<double>& meet,
+                         const std::vector<double>& radius, double w, std::size_t pilots,
+                         std::size_t k, std::vector<double>& out, std::vector<char>& left) {
+  const double inf = std::numeric_limits<double>::infinity();
+  std::size_t left_count = 0;
+  for (std::size_t a = 0; a < k; ++a) {
+    for (std::size_t b = a + 1; b < k; ++b) {
+      double v = direct[a * k + b];
+      if (!(v < inf)) v = direct[b * k + a];
+      if (!(v < inf) && a >= pilots && meet[a * k + b] <= radius[a] + radius[b] - w) {
+        v = meet[a * k + b];
+      }
+      if (v < inf) {
+        out[a * k + b] = v;
+      } else {
+        left[a * k + b] = 1;
+        ++left_count;
+      }
+    }
+  }
+  return left_count;
+}
+
 // pairwise_distances in the current arena, meeting searches with at most `tokens` queries at
 // once; searched (if given) is called as each source's search is done.
 std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
@@ -205,7 +282,6 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
     return out;
   }
   const double inf = std::numeric_limits<double>::infinity();
-  auto straight = [&](std::size_t i, std::size_t j) { return std::sqrt(straight2(points, i, j)); };
   auto others = [&](std::size_t i) {
     std::vector<core::SurfacePoint> t;
     for (std::size_t j = 0; j < k; ++j) {
@@ -216,44 +292,15 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
   // direct[i * k + j]: GD(i, j) as settled by the search from i (infinity if it was not).
   std::vector<double> direct(k * k, inf);
   std::vector<std::size_t> settled_by(k, 0);
-  // The first kPilots points are searched in full (in parallel): their distances give the
-  // estimates the radii need, the largest ratio of geodesic to straight-line distance over the
-  // farther half of each one's pairs. note: a fixed count, not one per thread: the radii, and so
-  // the figures, must not depend on the thread count.
+  // note: a fixed count of pilots, not one per thread: the radii, and so the figures, must not
+  // depend on the thread count.
   constexpr std::size_t kPilots = 2;
   const std::size_t pilots = std::min(kPilots, k);
-  std::vector<double> pilot_ratio(pilots, 1.0);
-  tbb::parallel_for(std::size_t{0}, pilots, [&](std::size_t p) {
-    core::GeodesicQuery q(graph);
-    std::vector<double> d;
-    q.distances(points[p], others(p), d);
-    settled_by[p] = q.settled();
-    std::vector<std::pair<double, double>> far;  // (straight, geodesic)
-    for (std::size_t j = 0, t = 0; j < k; ++j) {
-      if (j == p) continue;
-      direct[p * k + j] = d[t];
-      far.emplace_back(straight(p, j), d[t]);
-      ++t;
-    }
-    std::sort(far.begin(), far.end());
-    for (std::size_t t = far.size() / 2; t < far.size(); ++t) {
-      if (far[t].first > 0 && std::isfinite(far[t].second)) {
-        pilot_ratio[p] = std::max(pilot_ratio[p], far[t].second / far[t].first);
-      }
-    }
-    if (searched) searched();
-  });
-  const double ratio = *std::max_element(pilot_ratio.begin(), pilot_ratio.end());
+  const double ratio = search_pilots(graph, points, pilots, direct, settled_by, searched);
   // note: a pair joins where the searches overlap by the longest segment at least (the last
   // node of a shortest path inside one search is then settled by the other too).
   const double w = graph.max_segment();
-  std::vector<double> c(k * k, 0.0);
-  for (std::size_t i = pilots; i < k; ++i) {
-    for (std::size_t j = pilots; j < k; ++j) {
-      if (j != i) c[i * k + j] = 1.05 * ratio * straight(i, j) + w;
-    }
-  }
-  const std::vector<double> radius = meeting_radii(c, k);  // pilots' radii: unused
+  const std::vector<double> radius = search_radii(points, pilots, ratio, w);
 
   // The other sources are searched to their radii in a oneTBB pipeline of at most `tokens`
   // sources in flight, each holding one query: a serial stage hands out the sources in order,
@@ -308,25 +355,8 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
                     }
                     pool.push(item.query);
                   }));
-  // note: every value below comes from searches and joins whose results do not depend on the
-  // thread count, chosen by a fixed rule, so the figures are the same for any --threads.
   std::vector<char> left(k * k, 0);
-  std::size_t left_count = 0;
-  for (std::size_t a = 0; a < k; ++a) {
-    for (std::size_t b = a + 1; b < k; ++b) {
-      double v = direct[a * k + b];
-      if (!(v < inf)) v = direct[b * k + a];
-      if (!(v < inf) && a >= pilots && meet[a * k + b] <= radius[a] + radius[b] - w) {
-        v = meet[a * k + b];
-      }
-      if (v < inf) {
-        out[a * k + b] = v;
-      } else {
-        left[a * k + b] = 1;
-        ++left_count;
-      }
-    }
-  }
+  const std::size_t left_count = settle_pairs(direct, meet, radius, w, pilots, k, out, left);
   for (std::size_t n : settled_by) stats.settled += static_cast<double>(n);
   owned.clear();  // the one-way queries below take their memory
   if (left_count > 0) measure_one_way(graph, points, left, false, out, stats, nullptr);

@@ -57,7 +57,8 @@ struct MetaStats {
   // what the pieces needed, without the kept-vertex triangulation.
   std::size_t peak_rss_before_merge_kb = 0;
   // Bytes the pieces' kept vertices, outline edges and tails took at that point: the whole-DEM
-  // state, which grows with the kept count (the rest is bounded by the pieces in flight).
+  // state, which grows with the kept count (the rest is bounded by the pieces in flight). qem:
+  // the most its merge held at once (one group's pieces; all of them under dpts-mpi).
   std::size_t kept_bytes = 0;
   // qem: faces of the output not counter-clockwise in the output CRS (core::check_mesh's
   // clockwise_or_flat), counted as the merge writes them.

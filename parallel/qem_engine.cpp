@@ -753,7 +753,10 @@ core::TriMesh simplify_qem(const core::RasterSource& dem, const QemEngineOptions
         });
     st.simplify_s += seconds_since(t0);
     if (g == 0) st.peak_rss_before_merge_kb = peak_rss_kb();
-    for (std::size_t i = first; i < end; ++i) st.kept_bytes += outputs[i].bytes();
+    // The most the pieces' outputs held at once: one group's.
+    std::size_t group_bytes = 0;
+    for (std::size_t i = first; i < end; ++i) group_bytes += outputs[i].bytes();
+    st.kept_bytes = std::max(st.kept_bytes, group_bytes);
     const auto t1 = std::chrono::steady_clock::now();
     if (progress && !progress(static_cast<double>(g) / (groups.size() - 1), "merge")) {
       throw Cancelled();
