@@ -56,8 +56,10 @@ SpilledMesh::~SpilledMesh() {
 void SpilledMesh::add(const std::vector<double>& xyz,
                       const std::vector<std::array<std::uint32_t, 3>>& faces) {
   errno = 0;
-  if (std::fwrite(xyz.data(), sizeof(double), xyz.size(), xyz_) != xyz.size() ||
-      std::fwrite(faces.data(), sizeof(faces[0]), faces.size(), faces_file_) != faces.size() ||
+  // note: an empty vector's data() may be null, which fwrite must not be given.
+  if ((!xyz.empty() && std::fwrite(xyz.data(), sizeof(double), xyz.size(), xyz_) != xyz.size()) ||
+      (!faces.empty() &&
+       std::fwrite(faces.data(), sizeof(faces[0]), faces.size(), faces_file_) != faces.size()) ||
       std::fflush(xyz_) != 0 || std::fflush(faces_file_) != 0) {
     throw IoError("temporary file in " + dir_ + ": " + bytes::write_failure());
   }
