@@ -41,7 +41,9 @@ namespace {
 // race for the worker threads that poll it; TSan flagged the volatile ints this replaces).
 std::atomic<int> g_cancel{0};
 static_assert(std::atomic<int>::is_always_lock_free);
-extern "C" void on_signal(int) { g_cancel.store(1, std::memory_order_relaxed); }
+extern "C" void on_signal(int) {
+  g_cancel.store(1, std::memory_order_relaxed);
+}
 
 dpts::io::DemReadOptions read_options(const dpts::cli::ParOptions& o) {
   dpts::io::DemReadOptions r;
@@ -115,7 +117,7 @@ void write_mesh(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem,
         " --levels " + std::to_string(o.levels) + " --tile-mb " + std::to_string(o.tile_mb);
   }
   if (par::is_meta(o.algo)) generated += " --value-points " + std::to_string(o.value_points);
-  io::Mesh mesh;
+  io::Mesh mesh;  // the comments; its vertices and faces, unless the mesh was spilled
   mesh.comments.push_back(generated + " from " +
                           std::filesystem::path(o.input).filename().string());
   mesh.comments.push_back("crs " + (dem.output_wkt.empty() ? std::string("none") : dem.output_wkt));

@@ -67,23 +67,30 @@ void SpilledMesh::add(const std::vector<double>& xyz,
   faces_ += faces.size();
 }
 
-void SpilledMesh::read_all(std::FILE* f, std::size_t records, std::size_t record_bytes,
-                           const std::function<void(const char*, std::size_t)>& fn) const {
+void SpilledMesh::rewind(std::FILE* f) const {
   errno = 0;
   if (std::fflush(f) != 0 || std::fseek(f, 0, SEEK_SET) != 0) {
     throw IoError("temporary file in " + dir_ + ": " + bytes::write_failure());
   }
-  const std::size_t per_run = std::max<std::size_t>(1, kRunBytes / record_bytes);
-  std::vector<char> run(per_run * record_bytes);
+}
+
+// Every record of f in order, read into runs of about kRunBytes and handed to fn(run, n);
+// f is left at its end, where later adds append.
+template <typename T, typename Fn>
+void SpilledMesh::read_runs(std::FILE* f, std::size_t records, std::size_t per_record,
+                            Fn&& fn) const {
+  rewind(f);
+  const std::size_t per_run = std::max<std::size_t>(1, kRunBytes / (per_record * sizeof(T)));
+  std::vector<T> run(per_run * per_record);
   while (records > 0) {
     const std::size_t n = std::min(records, per_run);
-    if (std::fread(run.data(), record_bytes, n, f) != n) {
+    if (std::fread(run.data(), per_record * sizeof(T), n, f) != n) {
       throw IoError("temporary file in " + dir_ + ": read failed");
     }
     fn(run.data(), n);
     records -= n;
   }
-  std::fseek(f, 0, SEEK_END);  // later adds append
+  std::fseek(f, 0, SEEK_END);
 }
 
 MeshParts SpilledMesh::parts(const std::vector<std::string>* comments) const {
@@ -92,20 +99,10 @@ MeshParts SpilledMesh::parts(const std::vector<std::string>* comments) const {
   p.vertices = vertices_;
   p.faces = faces_;
   p.each_vertices = [this](const MeshParts::VertexRun& fn) {
-    std::vector<double> v;
-    read_all(xyz_, vertices_, 3 * sizeof(double), [&](const char* data, std::size_t n) {
-      v.resize(3 * n);
-      std::memcpy(v.data(), data, 3 * n * sizeof(double));
-      fn(v.data(), n);
-    });
+    read_runs<double>(xyz_, vertices_, 3, fn);
   };
   p.each_faces = [this](const MeshParts::FaceRun& fn) {
-    std::vector<std::array<std::uint32_t, 3>> t;
-    read_all(faces_file_, faces_, sizeof(t[0]), [&](const char* data, std::size_t n) {
-      t.resize(n);
-      std::memcpy(t.data(), data, n * sizeof(t[0]));
-      fn(t.data(), n);
-    });
+    read_runs<std::array<std::uint32_t, 3>>(faces_file_, faces_, 1, fn);
   };
   return p;
 }

@@ -47,9 +47,10 @@ class SpilledMesh : public core::MeshSink {
   core::TriMesh load() const;
 
  private:
-  // Calls fn(data, n) for runs of n records of record_bytes each, all `records` in order.
-  void read_all(std::FILE* f, std::size_t records, std::size_t record_bytes,
-                const std::function<void(const char*, std::size_t)>& fn) const;
+  void rewind(std::FILE* f) const;
+  // Runs of records (per_record values of T each) read back from f: fn(values, records).
+  template <typename T, typename Fn>
+  void read_runs(std::FILE* f, std::size_t records, std::size_t per_record, Fn&& fn) const;
   std::string dir_;
   std::FILE* xyz_ = nullptr;
   std::FILE* faces_file_ = nullptr;

@@ -375,8 +375,8 @@ class QemSweep {
   }
 
   // Pieces [first, end) (their outputs emptied) stitched to what is open at their seams,
-  // collapsed together with it, and what no later piece can change written to the output.
-  // last: no piece follows.
+  // collapsed together with it, and what no later piece can change written to the output (all
+  // of it when no piece follows).
   void add(std::vector<QemPieceMesh>& outputs, const std::vector<core::Piece>& pieces,
            std::size_t first, std::size_t end, const core::Progress& progress) {
     for (std::size_t i = first; i < end; ++i) done_ += static_cast<double>(pieces[i].vertices);
@@ -685,7 +685,8 @@ std::vector<core::Piece> plan_qem(const core::RasterSource& dem, const QemEngine
   const auto bytes = options.tile_bytes;
   const std::vector<core::Piece> pieces =
       divide_dem(dem, options.keep, options.levels, bytes, 1, progress, st, kQemPieceVertices);
-  // The merge holds one group's kept vertices (and the open band before it) and the output.
+  // The merge holds one group's kept vertices (and the open band before it), and the output
+  // unless it goes to a sink.
   const double fraction = std::min(1.0, options.slack * qem_fraction(st));
   const std::vector<std::size_t> groups = qem_groups(pieces, qem_fraction(st), options);
   double group = 0;
@@ -697,7 +698,7 @@ std::vector<core::Piece> plan_qem(const core::RasterSource& dem, const QemEngine
   }
   check_memory(dem, st.target_vertices,
                static_cast<std::size_t>(group * kQemBytesPerKeptVertex) +
-                   st.target_vertices * kQemBytesPerOutputVertex +
+                   (options.sink ? 0 : st.target_vertices * kQemBytesPerOutputVertex) +
                    pieces_in_flight_bytes(pieces, 1, bytes),
                options.memory_limit_bytes);
   return pieces;
