@@ -63,6 +63,7 @@ double mean_edge_length(const TriMesh& mesh) {
 }
 
 SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), delta_(delta) {
+  nv_ = static_cast<std::uint32_t>(mesh.vertex_count());
   if (!(delta > 0)) throw std::invalid_argument("Steiner spacing delta must be positive");
   face_edges_.resize(mesh.faces.size());
   const auto e = sorted_face_edges(mesh);
@@ -87,8 +88,9 @@ void SteinerGraph::build_nodes(const std::vector<std::tuple<std::uint64_t, std::
   const double delta = delta_;
   const std::size_t nv = mesh.vertex_count();
   nodes_.reserve(nodes);
+  node_edge_.reserve(nodes - nv);
   for (std::size_t v = 0; v < nv; ++v) {
-    nodes_.push_back({{mesh.xyz[3 * v], mesh.xyz[3 * v + 1], mesh.xyz[3 * v + 2]}, kNoEdge});
+    nodes_.push_back({mesh.xyz[3 * v], mesh.xyz[3 * v + 1], mesh.xyz[3 * v + 2]});
   }
   edges_.reserve(edge_count);
   edge_first_.reserve(edge_count + 1);
@@ -114,7 +116,8 @@ void SteinerGraph::build_nodes(const std::vector<std::tuple<std::uint64_t, std::
     for (std::uint32_t j = 1; j <= k; ++j) {
       const double t = static_cast<double>(j) / (k + 1);
       nodes_.push_back(
-          {{a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])}, edge});
+          {a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])});
+      node_edge_.push_back(edge);
     }
     edge_first_.push_back(static_cast<std::uint32_t>(nodes_.size()));
   }
@@ -221,7 +224,7 @@ SteinerGraph::Estimate SteinerGraph::estimate(const TriMesh& mesh, double delta)
   // Per node its record; per edge its record and first node; per face its edges and 3 corners;
   // per vertex its first corner; plus the sorted face edges construction holds meanwhile.
   const std::size_t nf = mesh.faces.size();
-  est.bytes = est.nodes * sizeof(Node) + edges * (sizeof(Edge) + 4) +
+  est.bytes = est.nodes * (sizeof(nodes_[0]) + sizeof(node_edge_[0])) + edges * (sizeof(Edge) + 4) +
               nf * (sizeof(std::array<std::uint32_t, 3>) + 3 * sizeof(Corner)) +
               4 * mesh.vertex_count() + e.size() * sizeof(e[0]);
   return est;
@@ -234,6 +237,20 @@ void SteinerGraph::face_nodes(std::uint32_t f, std::vector<std::uint32_t>& out) 
     const std::uint32_t e = face_edges_[f][i];
     for (std::uint32_t n = edge_first_[e]; n < edge_first_[e + 1]; ++n) out.push_back(n);
   }
+}
+
+void SteinerGraph::edge_nodes(std::uint32_t f, int i, std::vector<std::uint32_t>& out) const {
+  out.clear();
+  const std::uint32_t a = mesh_.faces[f][i], b = mesh_.faces[f][(i + 1) % 3];
+  const std::uint32_t e = face_edges_[f][i];
+  out.push_back(a);
+  // note: an edge's Steiner nodes run from its lower vertex id to its higher.
+  if (a < b) {
+    for (std::uint32_t n = edge_first_[e]; n < edge_first_[e + 1]; ++n) out.push_back(n);
+  } else {
+    for (std::uint32_t n = edge_first_[e + 1]; n-- > edge_first_[e];) out.push_back(n);
+  }
+  out.push_back(b);
 }
 
 void LabelHeap::reset(std::size_t nodes) {
@@ -349,8 +366,7 @@ bool BucketQueue::pop(Entry& out) {
   return false;
 }
 
-GeodesicQuery::GeodesicQuery(const SteinerGraph& graph, bool use_buckets)
-    : g_(graph), face_target_head_(graph.mesh().faces.size(), -1) {
+GeodesicQuery::GeodesicQuery(const SteinerGraph& graph, bool use_buckets) : g_(graph) {
   if (use_buckets && BucketQueue::ring_size(graph) > 0) {
     buckets_ = std::make_unique<BucketQueue>(graph);
   }
@@ -360,7 +376,7 @@ std::size_t GeodesicQuery::estimate_bytes(std::size_t nodes, std::size_t faces, 
                                           bool anchored) {
   // note: the buckets hold the queued nodes (the search's frontier, far fewer than the nodes);
   // an eighth of a label per node bounds them on the meshes measured.
-  return (nodes + targets) * 16 + nodes * 2 + faces * 4 + faces / 8 + targets * 16 +
+  return (nodes + targets) * 16 + nodes * 2 + faces / 8 + targets * 24 +
          (anchored ? nodes * sizeof(Anchor) : 0);
 }
 
@@ -403,11 +419,31 @@ void GeodesicQuery::index_targets(const std::vector<SurfacePoint>& targets) {
   target_next_.assign(targets.size(), -1);
   target_done_.assign(targets.size(), 0);
   target_faces_.assign((g_.mesh().faces.size() + 63) / 64, 0);
+  // note: each face's list runs from its last target to its first.
+  face_heads_.clear();
   for (std::size_t j = 0; j < targets.size(); ++j) {
     target_faces_[targets[j].face >> 6] |= std::uint64_t{1} << (targets[j].face & 63);
-    target_next_[j] = face_target_head_[targets[j].face];
-    face_target_head_[targets[j].face] = static_cast<std::int32_t>(j);
+    face_heads_.emplace_back(targets[j].face, static_cast<std::int32_t>(j));
   }
+  std::stable_sort(face_heads_.begin(), face_heads_.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::size_t heads = 0;
+  for (std::size_t i = 0; i < face_heads_.size(); ++i) {
+    const bool last =
+        i + 1 == face_heads_.size() || face_heads_[i + 1].first != face_heads_[i].first;
+    const bool first = i == 0 || face_heads_[i - 1].first != face_heads_[i].first;
+    target_next_[static_cast<std::size_t>(face_heads_[i].second)] =
+        first ? -1 : face_heads_[i - 1].second;
+    if (last) face_heads_[heads++] = face_heads_[i];
+  }
+  face_heads_.resize(heads);
+}
+
+std::int32_t GeodesicQuery::first_target(std::uint32_t f) const {
+  const auto it =
+      std::lower_bound(face_heads_.begin(), face_heads_.end(), f,
+                       [](const auto& h, std::uint32_t face) { return h.first < face; });
+  return it != face_heads_.end() && it->first == f ? it->second : -1;
 }
 
 template <typename Queue>
@@ -427,12 +463,21 @@ void GeodesicQuery::prefetch_ahead(const Queue& queue) const {
   // The next node to settle, most likely: its records load while this one relaxes.
   // note: in a bucket the order is known several nodes ahead: their labels and positions are
   // fetched three nodes ahead, their edge or corner records (found through the position
-  // record) and anchor one ahead.
-  const std::size_t n = g_.node_count();
+  // record) and anchor two ahead, and the records of the nodes the next one will relax one
+  // ahead (through its edge or corner record).
+  const std::size_t n = g_.node_count(), nv = g_.mesh().vertex_count();
   const std::uint32_t next = queue.next_hint(0);
   if (next < n) {
-    g_.prefetch(next);
-    if (anchored_) __builtin_prefetch(&anchors_[next]);
+    g_.for_each_neighbour_hint(next, [&](std::uint32_t v) {
+      g_.prefetch_position(v);
+      queue.prefetch_label(v);
+      if (anchored_ && v >= nv) __builtin_prefetch(&anchors_[v - nv]);
+    });
+  }
+  const std::uint32_t mid = queue.next_hint(1);
+  if (mid < n) {
+    g_.prefetch(mid);
+    if (anchored_ && mid >= nv) __builtin_prefetch(&anchors_[mid - nv]);
   }
   const std::uint32_t later = queue.next_hint(3);
   if (later < n) {
@@ -449,7 +494,6 @@ void GeodesicQuery::collect_targets(const Queue& queue, const std::vector<Surfac
   for (std::size_t j = 0; j < targets.size(); ++j) {
     if (target_done_[j]) out[j] = std::fabs(queue.dist(static_cast<std::uint32_t>(n + j)));
   }
-  for (const auto& t : targets) face_target_head_[t.face] = -1;
 }
 
 template <typename Queue, typename Relax>
@@ -506,7 +550,7 @@ void GeodesicQuery::run(Queue& queue, const SurfacePoint& source,
   };
   auto relax_targets = [&](std::uint32_t f, const double* p, double d, std::uint32_t from) {
     if (!(target_faces_[f >> 6] >> (f & 63) & 1)) return;
-    for (std::int32_t j = face_target_head_[f]; j >= 0; j = target_next_[j]) {
+    for (std::int32_t j = first_target(f); j >= 0; j = target_next_[j]) {
       const double q[3] = {targets[j].x, targets[j].y, targets[j].z};
       relax(static_cast<std::uint32_t>(n + j), p, q, d, SteinerGraph::kAnywhere, from);
     }
@@ -589,11 +633,6 @@ class GeodesicQuery::Anchored {
   static double norm(P3 a) { return std::sqrt(dot(a, a)); }
   static constexpr double kInf = std::numeric_limits<double>::infinity();
 
-  // A vertex has no anchor (lo > hi): a path through it bends there.
-  static void no_anchor(Anchor& an) {
-    an.lo = 1.0f;
-    an.hi = 0.0f;
-  }
   static bool has_anchor(const Anchor& an) { return an.lo <= an.hi; }
   // Node v (at v3) gets anchor point a (offsets from v).
   static void place(Anchor& an, P3 v3, P3 a) {
@@ -601,17 +640,19 @@ class GeodesicQuery::Anchored {
     an.off[1] = static_cast<float>(a.y - v3.y);
     an.off[2] = static_cast<float>(a.z - v3.z);
   }
-  // The anchor point of node u (at up).
+  // A Steiner node's anchor record (vertices have none: a path through one bends there).
+  Anchor& anchor(std::uint32_t v) const { return q_.anchors_[v - nv_]; }
+  // The anchor point of Steiner node u (at up).
   P3 anchor_of(std::uint32_t u, const double* up) const {
-    const Anchor& an = q_.anchors_[u];
+    const Anchor& an = anchor(u);
     return P3{up[0] + an.off[0], up[1] + an.off[1], up[2] + an.off[2]};
   }
   // The distance of anchor point a of a node at p3, at distance d: the node's less the segment.
   static double anchor_dist(P3 p3, P3 a, double d) { return d - norm(sub(p3, a)); }
   // Node v (at v3) bends: its anchor is point a, seen through v's whole edge.
   void set_anchor(std::uint32_t v, P3 v3, P3 a) {
-    Anchor& an = q_.anchors_[v];
-    if (v < nv_) return no_anchor(an);
+    if (v < nv_) return;
+    Anchor& an = anchor(v);
     place(an, v3, a);
     an.lo = 0.0f;
     an.hi = std::numeric_limits<float>::infinity();
@@ -658,7 +699,7 @@ class GeodesicQuery::Anchored {
     // note: not std::hypot, several times slower; the lengths are far from overflow.
     cx.ao = std::sqrt(cx.so * cx.so + cx.yo * cx.yo);
     cx.bo = std::sqrt((cx.so - cx.len) * (cx.so - cx.len) + cx.yo * cx.yo);
-    const Anchor& an = q_.anchors_[u];
+    const Anchor& an = anchor(u);
     if (!has_anchor(an)) return;
     const P3 A = anchor_of(u, up);
     const P3 r = sub(A, cx.a);
@@ -693,8 +734,8 @@ class GeodesicQuery::Anchored {
   // through cx_'s window. note: from the face's corners alone, no other record is read.
   void carry(std::uint32_t v, P3 v3, double sv, double yv) {
     const Crossing& cx = cx_;
-    Anchor& an = q_.anchors_[v];
-    if (v < nv_) return no_anchor(an);
+    if (v < nv_) return;
+    Anchor& an = anchor(v);
     // Its edge: the one v is nearer the line of; its ends in id order (as the graph keeps them).
     const double off_ao = std::fabs(sv * cx.yo - yv * cx.so) / cx.ao;
     const double off_bo = std::fabs((sv - cx.len) * cx.yo - yv * (cx.so - cx.len)) / cx.bo;
@@ -738,7 +779,7 @@ class GeodesicQuery::Anchored {
   // else bent at up.
   void relax_targets(std::uint32_t f, const double* up, double d, std::uint32_t from) {
     if (!(q_.target_faces_[f >> 6] >> (f & 63) & 1)) return;
-    for (std::int32_t j = q_.face_target_head_[f]; j >= 0; j = q_.target_next_[j]) {
+    for (std::int32_t j = q_.first_target(f); j >= 0; j = q_.target_next_[j]) {
       const P3 p{targets_[j].x, targets_[j].y, targets_[j].z};
       const double nd = through(up, d, p);
       const auto v = static_cast<std::uint32_t>(n_ + j);
@@ -766,8 +807,8 @@ class GeodesicQuery::Anchored {
     const P3 v3 = pt(g_.position(v));
     if (via == SteinerGraph::kAlongEdge) {
       // Along u's own edge: straight from u's anchor where its window holds v.
-      const Anchor& an = q_.anchors_[u];
-      if (u >= nv_ && has_anchor(an)) {
+      if (u >= nv_ && has_anchor(anchor(u))) {
+        const Anchor& an = anchor(u);
         const auto ends = g_.node_edge_ends(u);
         const P3 a = pt(g_.position(ends[0]));
         const double sv = norm(sub(v3, a));
@@ -776,7 +817,7 @@ class GeodesicQuery::Anchored {
           const P3 A = anchor_of(u, up);
           const double da = anchor_dist(u3, A, d);
           if (improve(v, da + norm(sub(v3, A)), via, u) && v >= nv_) {
-            Anchor& av = q_.anchors_[v];
+            Anchor& av = anchor(v);
             av = an;
             place(av, v3, A);
           }
@@ -822,7 +863,9 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
                                  std::vector<std::pair<std::uint32_t, double>>* shell,
                                  std::vector<double>& out, std::size_t required) {
   const std::size_t n = g_.node_count();
-  if (anchors_.size() != n) anchors_.resize(n);
+  // note: Steiner nodes only (a vertex has no anchor).
+  const std::size_t steiner = g_.steiner_count();
+  if (anchors_.size() != steiner) anchors_.resize(steiner);
   index_targets(targets);
   queue.reset(n + targets.size());
   Anchored<Queue> search(*this, queue, targets);

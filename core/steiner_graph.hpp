@@ -51,18 +51,41 @@ class SteinerGraph {
   double delta() const { return delta_; }
   std::size_t node_count() const { return nodes_.size(); }
   std::size_t steiner_count() const { return node_count() - mesh_.vertex_count(); }
-  const double* position(std::uint32_t node) const { return nodes_[node].p.data(); }
+  const double* position(std::uint32_t node) const { return nodes_[node].data(); }
 
   // Hints the cache about what for_each_neighbour(node) will read: Dijkstra calls it when it
   // first reaches a node, long before the node is settled.
-  void prefetch_position(std::uint32_t node) const { __builtin_prefetch(&nodes_[node]); }
+  void prefetch_position(std::uint32_t node) const {
+    __builtin_prefetch(&nodes_[node]);
+    if (node >= nv_) __builtin_prefetch(&node_edge_[node - nv_]);
+  }
   void prefetch(std::uint32_t node) const {
     __builtin_prefetch(&nodes_[node]);
-    const std::uint32_t e = nodes_[node].edge;
-    if (e != kNoEdge) {
-      __builtin_prefetch(&edges_[e]);
+    if (node >= nv_) {
+      __builtin_prefetch(&edges_[edge_of(node)]);
     } else {
       __builtin_prefetch(&corners_[corner_first_[node]]);
+    }
+  }
+
+  // Calls fn(v) for nodes that for_each_neighbour(node, ...) most likely relaxes (the first of
+  // each contiguous run), so that a search can prefetch their records before it settles node.
+  template <typename Fn>
+  void for_each_neighbour_hint(std::uint32_t node, Fn&& fn) const {
+    if (node < mesh_.vertex_count()) {
+      for (std::uint32_t k = corner_first_[node]; k < corner_first_[node + 1]; ++k) {
+        const Corner& c = corners_[k];
+        fn(c.along[0]);
+        fn(c.across_first);
+      }
+      return;
+    }
+    const Edge& e = edges_[edge_of(node)];
+    for (const Edge::Side& side : e.sides) {
+      if (side.face == kNoFace) continue;
+      fn(side.opposite);
+      fn(side.first[0]);
+      fn(side.first[1]);
     }
   }
 
@@ -74,6 +97,8 @@ class SteinerGraph {
 
   // The nodes on face f's boundary (its corners and its edges' Steiner points), into out.
   void face_nodes(std::uint32_t f, std::vector<std::uint32_t>& out) const;
+  // The nodes on face f's edge i, from corner i to corner i + 1 (both included), into out.
+  void edge_nodes(std::uint32_t f, int i, std::vector<std::uint32_t>& out) const;
 
   // Topology, for following a path through the faces (see geodesic_path.hpp).
   // The face across face f's edge i (from corner i to corner i + 1), kNoFace on the outline.
@@ -84,11 +109,11 @@ class SteinerGraph {
   // The mesh vertices a Steiner node's edge joins; for a vertex node, {node, node}.
   std::array<std::uint32_t, 2> node_edge_ends(std::uint32_t node) const {
     if (node < mesh_.vertex_count()) return {node, node};
-    return edges_[nodes_[node].edge].ends;
+    return edges_[edge_of(node)].ends;
   }
   // The corner of face f off a Steiner node's edge (f: one of the edge's faces).
   std::uint32_t opposite(std::uint32_t node, std::uint32_t f) const {
-    const Edge& e = edges_[nodes_[node].edge];
+    const Edge& e = edges_[edge_of(node)];
     return e.sides[0].face == f ? e.sides[0].opposite : e.sides[1].opposite;
   }
   // Calls fn(f) for each face around vertex v (in no particular order).
@@ -133,7 +158,7 @@ class SteinerGraph {
       }
       return;
     }
-    const Edge& e = edges_[nodes_[node].edge];
+    const Edge& e = edges_[edge_of(node)];
     if (entry == kAlongEdge || entry == kAnywhere) {
       node_fn(node == e.first ? e.ends[0] : node - 1, kAlongEdge);
       node_fn(node + 1 == e.end ? e.ends[1] : node + 1, kAlongEdge);
@@ -160,12 +185,13 @@ class SteinerGraph {
   const TriMesh& mesh_;
   double delta_;
   double min_segment_ = 0, max_segment_ = 0;
-  static constexpr std::uint32_t kNoEdge = 0xFFFFFFFFu;
-  struct Node {  // vertices first, then each edge's Steiner points
-    std::array<double, 3> p;
-    std::uint32_t edge;  // the edge a Steiner point lies on; kNoEdge for a vertex
-  };
-  HugeVector<Node> nodes_;
+  // The edge Steiner node `node` lies on.
+  std::uint32_t edge_of(std::uint32_t node) const { return node_edge_[node - nv_]; }
+  // note: positions and edges apart, each array dense (24 and 4 bytes a node, where one record
+  // took 32): a settled node's edge is read two nodes ahead (GeodesicQuery::prefetch_ahead).
+  HugeVector<std::array<double, 3>> nodes_;  // vertices first, then each edge's Steiner points
+  HugeVector<std::uint32_t> node_edge_;      // per Steiner node (node - nv_): its edge
+  std::uint32_t nv_ = 0;                     // the mesh's vertices
   std::vector<std::array<std::uint32_t, 3>> face_edges_;  // edge of (v0,v1), (v1,v2), (v2,v0)
   std::vector<std::uint32_t> edge_first_;                 // first Steiner node of each edge, + end
   // note: Dijkstra's time goes into cache misses, one per dependent load; so what a settled node
@@ -321,9 +347,10 @@ class GeodesicQuery {
   explicit GeodesicQuery(const SteinerGraph& graph, bool use_buckets = true);
 
   // The memory (bytes) of one query on a graph of `nodes` nodes over `faces` faces with
-  // `targets` targets: its labels (16 bytes per node and target), per-face target lists, and
-  // the queue's buckets.
-  // An anchored query (set_anchored) needs sizeof(Anchor) more per node.
+  // `targets` targets: its labels (16 bytes per node and target), a bit per face and the
+  // targets' lists by face, and the queue's buckets.
+  // An anchored query (set_anchored) needs sizeof(Anchor) more per Steiner node (counted here
+  // per node).
   static std::size_t estimate_bytes(std::size_t nodes, std::size_t faces, std::size_t targets,
                                     bool anchored = false);
 
@@ -377,8 +404,10 @@ class GeodesicQuery {
   void search(const SurfacePoint& source, const std::vector<SurfacePoint>& targets, double radius,
               double shell_from, std::vector<std::pair<std::uint32_t, double>>* shell,
               std::vector<double>& out, std::size_t required);
-  // The targets listed by face (face_target_head_, target_next_, target_faces_), none done.
+  // The targets listed by face (face_heads_, target_next_, target_faces_), none done.
   void index_targets(const std::vector<SurfacePoint>& targets);
+  // The last target in face f, -1: none (then target_next_ from it).
+  std::int32_t first_target(std::uint32_t f) const;
   // Dijkstra's loop: pops until the queue is empty or finished; a popped target is settled
   // (settle_target), any other node counted, checked against the radius and the shell, then
   // relaxed by relax(node, distance, tag).
@@ -392,7 +421,7 @@ class GeodesicQuery {
   // Prefetches the records of the nodes the queue will most likely settle next.
   template <typename Queue>
   void prefetch_ahead(const Queue& queue) const;
-  // The done targets' distances into out; the face lists emptied for the next query.
+  // The done targets' distances into out.
   template <typename Queue>
   void collect_targets(const Queue& queue, const std::vector<SurfacePoint>& targets,
                        std::vector<double>& out);
@@ -411,7 +440,9 @@ class GeodesicQuery {
   const SteinerGraph& g_;
   LabelHeap heap_;
   std::unique_ptr<BucketQueue> buckets_;
-  std::vector<std::int32_t> face_target_head_;  // first target in a face, -1: none
+  // (face, its list's head) for each face with a target, by face: a few entries, where an
+  // array over the faces would take 4 bytes a face per search.
+  std::vector<std::pair<std::uint32_t, std::int32_t>> face_heads_;
   std::vector<std::uint64_t> target_faces_;     // bit per face: has a target (fits in cache)
   std::vector<std::int32_t> target_next_;
   std::vector<char> target_done_;  // target settled (its distance final once the search ends)
@@ -420,9 +451,9 @@ class GeodesicQuery {
   bool anchored_ = false;
   // An anchored label: the point its straight segment starts from (offset from the node, in
   // the plane of the face it came through), and the part of the node's edge (metres from its
-  // first end) the point sees through the faces crossed; lo > hi: none (the path bends at the
-  // node). note: the point's own distance is not kept: it is the node's less the offset's
-  // length (20 bytes a node, not 32).
+  // first end) the point sees through the faces crossed. Steiner nodes only: a path through a
+  // vertex bends there. note: the point's own distance is not kept: it is the node's less the
+  // offset's length (20 bytes a node, not 32).
   struct Anchor {
     float off[3];
     float lo, hi;
