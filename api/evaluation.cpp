@@ -152,6 +152,7 @@ std::string Evaluation::json(const EvalRequest& request, int threads, double sec
                                         : "steiner")
       .add("straightened_paths", r.straightened)
       .add("straighten_failed", r.straighten_failed)
+      .add("shortened_pairs", r.shortened)
       .add("pairs_measured", r.pairs_measured)
       .add("pairs_unconnected_dem", r.pairs_unconnected)
       .add("pairs_coincident", r.pairs_coincident)

@@ -371,12 +371,17 @@ double PathStraightener::length(const SurfacePoint& source, const std::vector<st
 
 double PathStraightener::shortest(const GeodesicQuery& query, const SurfacePoint& source,
                                   std::size_t target, const SurfacePoint& target_point,
-                                  double steiner_distance) {
+                                  double steiner_distance,
+                                  std::vector<std::array<double, 2>>* route) {
   if (!std::isfinite(steiner_distance)) return steiner_distance;
   double best = std::numeric_limits<double>::infinity();
+  if (route) route->clear();
   query.path(target, path_);
   const double direct = length(source, path_, target_point);
-  if (direct >= 0) best = std::min(best, direct);
+  if (direct >= 0) {
+    best = direct;
+    if (route) bends_route(*route);
+  }
   // note: a node reached from a node already tried, or from the source, ends the same path
   // taut in the same way: one path per predecessor.
   tried_.clear();
@@ -395,11 +400,100 @@ double PathStraightener::shortest(const GeodesicQuery& query, const SurfacePoint
     tried_.push_back(p);
     query.path_to_node(v, path_);
     const double len = length(source, path_, target_point);
-    if (len >= 0) best = std::min(best, len);
+    if (len >= 0 && len < best) {
+      best = len;
+      if (route) bends_route(*route);
+    }
   }
   // note: the straightened lengths, not the search's (an anchored search rounds its anchors
   // to floats, so its distance may sit a hair below the path it stands for).
   return std::isfinite(best) ? best : steiner_distance;
+}
+
+void PathStraightener::bends_route(std::vector<std::array<double, 2>>& route) const {
+  const TriMesh& m = g_.mesh();
+  route.clear();
+  for (const Bend& b : bends_) route.push_back({m.xyz[3 * b.vertex], m.xyz[3 * b.vertex + 1]});
+}
+
+double PathStraightener::along(const SurfacePoint& source,
+                               const std::vector<std::array<double, 2>>& route,
+                               const SurfacePoint& target) {
+  const TriMesh& m = g_.mesh();
+  auto xy = [&](std::uint32_t v) { return std::array<double, 2>{m.xyz[3 * v], m.xyz[3 * v + 1]}; };
+  auto orient = [](std::array<double, 2> a, std::array<double, 2> b, std::array<double, 2> c) {
+    return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+  };
+  // Walks straight (seen from above) from p to q across the faces from f, appending the node
+  // nearest each edge crossed; f ends as q's face. note: a walk that does not reach q within
+  // as many steps as the mesh has faces is given up (a degenerate face).
+  std::vector<std::uint32_t>& nodes = path_;
+  nodes.clear();
+  std::uint32_t f = source.face;
+  int entry = -1;
+  std::size_t steps = 0;
+  auto walk = [&](std::array<double, 2> p, std::array<double, 2> q) {
+    // note: a segment may leave back through the edge the last one came in by (a sharp turn).
+    entry = -1;
+    for (;;) {
+      const auto& c = m.faces[f];
+      const double sign = orient(xy(c[0]), xy(c[1]), xy(c[2])) < 0 ? -1.0 : 1.0;
+      int exit = -1;
+      double ta = 0, tb = 0;
+      for (int i = 0; i < 3 && exit < 0; ++i) {
+        if (i == entry) continue;
+        const auto a = xy(c[i]), b = xy(c[(i + 1) % 3]);
+        if (!(sign * orient(a, b, q) < 0)) continue;  // q not beyond this edge
+        ta = orient(p, q, a);
+        tb = orient(p, q, b);
+        if ((ta <= 0 && tb >= 0) || (ta >= 0 && tb <= 0)) exit = i;
+      }
+      if (exit < 0) return true;  // q is in f
+      if (++steps > m.faces.size()) return false;
+      // The crossing, as a fraction of the edge from corner `exit`; the node nearest it.
+      const double t = ta == tb ? 0.5 : ta / (ta - tb);
+      g_.edge_nodes(f, exit, around_);
+      const auto pick = around_[static_cast<std::size_t>(
+          std::lround(std::clamp(t, 0.0, 1.0) * static_cast<double>(around_.size() - 1)))];
+      if (nodes.empty() || nodes.back() != pick) nodes.push_back(pick);
+      const std::uint32_t next = g_.across(f, exit);
+      if (next == SteinerGraph::kNoFace) return false;
+      entry = -1;
+      for (int i = 0; i < 3; ++i) {
+        if (g_.across(next, i) == f) entry = i;
+      }
+      f = next;
+    }
+  };
+  std::array<double, 2> p{source.x, source.y};
+  for (const auto& q : route) {
+    if (!walk(p, q)) return -1;
+    p = q;
+  }
+  if (!walk(p, {target.x, target.y})) return -1;
+  if (f != target.face) {
+    // The target on an edge (or a corner) of the face the walk ended in: through the node of
+    // their shared edge nearest it.
+    int shared = -1;
+    for (int i = 0; i < 3; ++i) {
+      if (g_.across(f, i) == target.face) shared = i;
+    }
+    if (shared < 0) return -1;
+    g_.edge_nodes(f, shared, around_);
+    std::uint32_t pick = around_[0];
+    double best = std::numeric_limits<double>::infinity();
+    for (std::uint32_t v : around_) {
+      const double* q = g_.position(v);
+      const double d2 =
+          (q[0] - target.x) * (q[0] - target.x) + (q[1] - target.y) * (q[1] - target.y);
+      if (d2 < best) {
+        best = d2;
+        pick = v;
+      }
+    }
+    if (nodes.empty() || nodes.back() != pick) nodes.push_back(pick);
+  }
+  return length(source, nodes, target);
 }
 
 }  // namespace dpts::core

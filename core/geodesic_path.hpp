@@ -36,8 +36,19 @@ class PathStraightener {
   // equal length around some hill, passes by the target, its boundary nodes are reached by
   // both; the graph's error may have ranked the longer first). Infinity where the target was
   // not reached; the Steiner distance where no path could be straightened.
+  // With route, the shortest one's route into it (the mesh vertices it bends at, seen from
+  // above, in order; empty: straight, or none was straightened), for along() on another mesh.
   double shortest(const GeodesicQuery& query, const SurfacePoint& source, std::size_t target,
-                  const SurfacePoint& target_point, double steiner_distance);
+                  const SurfacePoint& target_point, double steiner_distance,
+                  std::vector<std::array<double, 2>>* route = nullptr);
+
+  // The length of the locally shortest path from source to target that starts along `route`
+  // (points seen from above, in order from source to target, such as another mesh's path
+  // between the same points): the graph node nearest each crossing of the route with an edge,
+  // straightened as in length(). Negative where the route leaves the mesh or does not end in
+  // the target's face.
+  double along(const SurfacePoint& source, const std::vector<std::array<double, 2>>& route,
+               const SurfacePoint& target);
 
   // What the calls so far did: paths straightened, strips pulled taut (one per pass), vertices
   // rerouted around, and paths that could not be straightened.
@@ -62,6 +73,8 @@ class PathStraightener {
     std::size_t portal;
   };
 
+  // The vertices the last taut path bent at, seen from above, into route.
+  void bends_route(std::vector<std::array<double, 2>>& route) const;
   bool build_strip(const SurfacePoint& source, const std::vector<std::uint32_t>& nodes,
                    const SurfacePoint& target);
   void push_face(std::uint32_t f);

@@ -80,8 +80,17 @@ std::vector<std::vector<std::size_t>> assign_pairs(const std::vector<core::Surfa
 // `stats`; calls searched (if given) as each source is done.
 void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::SurfacePoint>& points,
                      const std::vector<char>& need, bool straighten, std::vector<double>& out,
-                     PairwiseStats& stats, const std::function<void()>& searched) {
+                     PairwiseStats& stats, const std::function<void()>& searched,
+                     PairRoutes* routes_out = nullptr) {
   const std::size_t k = points.size();
+  // note: routes only with straighten (they are the straightened paths' bends).
+  if (!straighten) routes_out = nullptr;
+  std::vector<std::vector<std::array<float, 2>>> reverse_routes;
+  if (routes_out) {
+    routes_out->origin = {points.empty() ? 0.0 : points[0].x, points.empty() ? 0.0 : points[0].y};
+    routes_out->xy.assign(k * k, {});
+    reverse_routes.assign(k * k, {});
+  }
   const std::vector<std::vector<std::size_t>> assigned = assign_pairs(points, need);
   // note: two searches, each straightened, rank the routes of a pair independently; where the
   // graph's error put one on the longer of two nearly equal routes, the other mostly is not.
@@ -96,6 +105,22 @@ void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::Su
   // Per source: the same sums for any thread count.
   std::vector<std::size_t> settled_by(k, 0);
   std::vector<core::PathStraightener::Stats> straightened_by(k);
+  // The route from point i to j (PathStraightener::shortest), from min(i, j), into r; it ends
+  // at point max(i, j), so that a straight one is not empty (empty: none).
+  auto store_route = [&](std::size_t i, std::size_t j,
+                         const std::vector<std::array<double, 2>>& route,
+                         std::vector<std::array<float, 2>>& r) {
+    const auto& origin = routes_out->origin;
+    auto offset = [&](double x, double y) {
+      return std::array<float, 2>{static_cast<float>(x - origin[0]),
+                                  static_cast<float>(y - origin[1])};
+    };
+    r.clear();
+    for (const auto& p : route) r.push_back(offset(p[0], p[1]));
+    if (i > j) std::reverse(r.begin(), r.end());
+    const core::SurfacePoint& end = points[std::max(i, j)];
+    r.push_back(offset(end.x, end.y));
+  };
   struct Scratch {
     core::GeodesicQuery query;
     core::PathStraightener straightener;
@@ -111,6 +136,7 @@ void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::Su
         if (!sc) sc = std::make_unique<Scratch>(graph, straighten);
         std::vector<core::SurfacePoint> targets;
         std::vector<double> d;
+        std::vector<std::array<double, 2>> best;
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
           if (assigned[i].empty()) {
             if (searched) searched();
@@ -128,14 +154,20 @@ void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::Su
           settled_by[i] = sc->query.settled();
           const auto before = sc->straightener.stats();
           for (std::size_t t = 0; t < targets.size(); ++t) {
+            const std::size_t j = t < own ? assigned[i][t] : rides[i][t - own];
             if (straighten) {
-              d[t] = sc->straightener.shortest(sc->query, points[i], t, targets[t], d[t]);
+              d[t] = sc->straightener.shortest(sc->query, points[i], t, targets[t], d[t],
+                                               routes_out ? &best : nullptr);
+              if (routes_out && std::isfinite(d[t])) {
+                store_route(i, j, best,
+                            t < own ? routes_out->xy[std::min(i, j) * k + std::max(i, j)]
+                                    : reverse_routes[i * k + j]);
+              }
             }
             if (t < own) {
-              const std::size_t j = assigned[i][t];
               out[std::min(i, j) * k + std::max(i, j)] = d[t];
             } else {
-              reverse[i * k + rides[i][t - own]] = d[t];
+              reverse[i * k + j] = d[t];
             }
           }
           const auto& after = sc->straightener.stats();
@@ -148,7 +180,13 @@ void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::Su
     for (std::size_t i = 0; i < k; ++i) {
       for (std::size_t j : rides[i]) {
         double& v = out[std::min(i, j) * k + std::max(i, j)];
-        v = std::min(v, reverse[i * k + j]);
+        if (reverse[i * k + j] < v) {
+          v = reverse[i * k + j];
+          if (routes_out) {
+            routes_out->xy[std::min(i, j) * k + std::max(i, j)] =
+                std::move(reverse_routes[i * k + j]);
+          }
+        }
       }
     }
   }
@@ -277,7 +315,8 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
     for (std::size_t j = i + 1; j < k; ++j) need[i * k + j] = 1;
   }
   if (options.straighten || method == PairwiseMethod::kOneWay || k < 3) {
-    measure_one_way(graph, points, need, options.straighten, out, stats, searched);
+    measure_one_way(graph, points, need, options.straighten, out, stats, searched,
+                    options.routes_out);
     stats.one_way_pairs += k * (k - 1) / 2;
     return out;
   }
@@ -403,47 +442,85 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
       [&] { return pairwise_in_arena(graph, points, options, st, tokens, searched); });
 }
 
+std::size_t shorten_along(const core::SteinerGraph& graph,
+                          const std::vector<core::SurfacePoint>& points, const PairRoutes& routes,
+                          std::vector<double>& distances) {
+  const std::size_t k = points.size();
+  std::vector<std::size_t> shortened(k, 0);
+  tbb::enumerable_thread_specific<std::unique_ptr<core::PathStraightener>> scratch;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, k, 1),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      auto& st = scratch.local();
+                      if (!st) st = std::make_unique<core::PathStraightener>(graph);
+                      std::vector<std::array<double, 2>> route;
+                      for (std::size_t a = r.begin(); a < r.end(); ++a) {
+                        for (std::size_t b = a + 1; b < k; ++b) {
+                          double& d = distances[a * k + b];
+                          const auto& xy = routes.xy[a * k + b];
+                          if (!std::isfinite(d) || xy.empty()) continue;
+                          route.clear();
+                          for (const auto& p : xy)
+                            route.push_back({routes.origin[0] + p[0], routes.origin[1] + p[1]});
+                          // note: only a shorter route, not the same one rounded otherwise (a mesh
+                          // measured against itself gives 0).
+                          const double len = st->along(points[a], route, points[b]);
+                          if (len >= 0 && len < d * (1 - 1e-12)) {
+                            d = len;
+                            ++shortened[a];
+                          }
+                        }
+                      }
+                    });
+  std::size_t total = 0;
+  for (std::size_t n : shortened) total += n;
+  return total;
+}
+
 namespace {
 
-// The geodesics of both meshes: exact (CGAL), or on their Steiner graphs.
+// The geodesics of both meshes: exact (CGAL), or on their Steiner graphs (one at a time).
 struct Geodesics {
   std::unique_ptr<core::ExactGeodesics> exact_t, exact_s;
   std::unique_ptr<core::SteinerGraph> graph_t, graph_s;
 };
 
-// Builds the exact geodesics of both meshes, or their Steiner graphs (deltas, memory and the
-// searches the budget holds into result), then says so through stage.
-Geodesics build_geodesics(const core::TriMesh& original, const core::TriMesh& simplified,
-                          const EvalOptions& options, PairwiseMethod method, std::size_t k_max,
-                          EvalResult& result,
-                          const std::function<void(const std::string&)>& stage) {
+// Builds the exact geodesics of both meshes, then says so through stage.
+Geodesics build_exact(const core::TriMesh& original, const core::TriMesh& simplified,
+                      const std::function<void(const std::string&)>& stage) {
   Geodesics g;
-  if (options.exact) {
-    try {
-      g.exact_t = std::make_unique<core::ExactGeodesics>(original);
-    } catch (const std::invalid_argument& e) {
-      throw InputError(std::string("the DEM's grid TIN: ") + e.what());
-    }
-    g.exact_s = std::make_unique<core::ExactGeodesics>(simplified);
-    stage("exact geodesics (CGAL): T " + std::to_string(original.faces.size()) + " faces, T' " +
-          std::to_string(simplified.faces.size()) + " faces");
-    return g;
+  try {
+    g.exact_t = std::make_unique<core::ExactGeodesics>(original);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(std::string("the DEM's grid TIN: ") + e.what());
   }
+  g.exact_s = std::make_unique<core::ExactGeodesics>(simplified);
+  stage("exact geodesics (CGAL): T " + std::to_string(original.faces.size()) + " faces, T' " +
+        std::to_string(simplified.faces.size()) + " faces");
+  return g;
+}
+
+// The Steiner graphs' spacings, their memory and the searches the budget holds, into result.
+// note: the graphs are built one after the other, each freed before the next: the peak holds
+// the larger one and its searches.
+void plan_graphs(const core::TriMesh& original, const core::TriMesh& simplified,
+                 const EvalOptions& options, PairwiseMethod method, std::size_t k_max,
+                 EvalResult& result) {
   // note: the paper's Steiner distances need one delta on both meshes (their bias depends on
   // it); straightened ones are exact but for near ties, whose share depends on the spacing
   // relative to the mesh's own faces, so each mesh gets its own.
   if (options.delta_m > 0) {
     result.delta_m = result.delta_mesh_m = options.delta_m;
   } else if (options.straighten) {
-    result.delta_m = kStraightenedDeltaFactor * core::mean_edge_length(original);
-    result.delta_mesh_m = kStraightenedDeltaFactor * core::mean_edge_length(simplified);
+    // note: never finer on T' than on T, so that T measured against itself gives 0.
+    result.delta_m = kStraightenedDeltaFactorDem * core::mean_edge_length(original);
+    result.delta_mesh_m =
+        std::max(kStraightenedDeltaFactor * core::mean_edge_length(simplified), result.delta_m);
   } else {
     result.delta_m = result.delta_mesh_m = kDefaultDeltaFactor * core::mean_edge_length(original);
   }
-  // Memory: both graphs, and as many searches on T (the larger graph) as the budget holds.
   const auto est_t = core::SteinerGraph::estimate(original, result.delta_m);
   const auto est_s = core::SteinerGraph::estimate(simplified, result.delta_mesh_m);
-  result.graphs_bytes = est_t.bytes + est_s.bytes;
+  result.graphs_bytes = std::max(est_t.bytes, est_s.bytes);
   result.search_bytes = core::GeodesicQuery::estimate_bytes(
       std::max(est_t.nodes, est_s.nodes), std::max(original.faces.size(), simplified.faces.size()),
       k_max, options.straighten);
@@ -452,7 +529,7 @@ Geodesics build_geodesics(const core::TriMesh& original, const core::TriMesh& si
     if (need > options.memory_budget_bytes) {
       throw InputError(
           "the geodesics need about " + format_bytes(static_cast<double>(need)) +
-          " (Steiner graphs " + format_bytes(static_cast<double>(result.graphs_bytes)) + ", " +
+          " (a Steiner graph of " + format_bytes(static_cast<double>(result.graphs_bytes)) + ", " +
           std::to_string(min_searches(method)) + " searches of " +
           format_bytes(static_cast<double>(result.search_bytes)) + "), more than the " +
           format_bytes(static_cast<double>(options.memory_budget_bytes)) +
@@ -463,13 +540,19 @@ Geodesics build_geodesics(const core::TriMesh& original, const core::TriMesh& si
         std::min((options.memory_budget_bytes - result.graphs_bytes) / result.search_bytes,
                  unbounded_searches(threads));
   }
-  g.graph_t = std::make_unique<core::SteinerGraph>(original, result.delta_m);
-  g.graph_s = std::make_unique<core::SteinerGraph>(simplified, result.delta_mesh_m);
-  result.original_nodes = g.graph_t->node_count();
-  result.simplified_nodes = g.graph_s->node_count();
-  stage("Steiner graphs: T " + std::to_string(result.original_nodes) + " nodes, T' " +
-        std::to_string(result.simplified_nodes) + " nodes");
-  return g;
+}
+
+// Builds the Steiner graph of T (on_t) or T' into geo, the other one freed first; its size into
+// result, then says so through stage.
+void build_graph(Geodesics& geo, bool on_t, const core::TriMesh& mesh, EvalResult& result,
+                 const std::function<void(const std::string&)>& stage) {
+  geo.graph_t.reset();
+  geo.graph_s.reset();
+  auto& graph = on_t ? geo.graph_t : geo.graph_s;
+  graph = std::make_unique<core::SteinerGraph>(mesh, on_t ? result.delta_m : result.delta_mesh_m);
+  (on_t ? result.original_nodes : result.simplified_nodes) = graph->node_count();
+  stage(std::string("Steiner graph of ") + (on_t ? "T: " : "T': ") +
+        std::to_string(graph->node_count()) + " nodes");
 }
 
 // The points xy located on a mesh (snapped within snap_m, counted into snapped); an
@@ -544,7 +627,8 @@ std::vector<double> geodesic_stage(const Geodesics& geo, bool on_t,
                                    const std::vector<core::SurfacePoint>& points,
                                    const EvalOptions& options, PairwiseMethod method,
                                    std::size_t max_searches, const std::string& name,
-                                   const core::Progress& progress, PairwiseStats& stats) {
+                                   const core::Progress& progress, PairwiseStats& stats,
+                                   PairRoutes* routes_out) {
   bool stop = false;  // note: written under the report lock of the pairwise call, read after it
   const std::size_t k = points.size();
   std::vector<double> d;
@@ -562,6 +646,7 @@ std::vector<double> geodesic_stage(const Geodesics& geo, bool on_t,
     po.method = method;
     po.straighten = options.straighten;
     po.max_searches = max_searches;
+    po.routes_out = routes_out;
     if (progress) {
       po.on_search = [&](std::size_t searched) {
         if (!progress(static_cast<double>(searched) / static_cast<double>(k), name)) stop = true;
@@ -594,50 +679,81 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
   auto set_name = [&](std::size_t set) {
     return given ? "sample set " + std::to_string(set) : "set " + std::to_string(set + 1);
   };
-  const Geodesics geo =
-      build_geodesics(original, simplified, options, method, k_max, result, stage);
+  Geodesics geo;
+  if (options.exact) {
+    geo = build_exact(original, simplified, stage);
+  } else {
+    plan_graphs(original, simplified, options, method, k_max, result);
+  }
   const core::PointLocator locate_s(simplified);
   std::optional<core::PointLocator> locate_t;
   if (given) locate_t.emplace(original);
 
-  auto geodesics = [&](const std::string& name, bool on_t,
-                       const std::vector<core::SurfacePoint>& points, PairwiseStats& stats) {
-    stage(name);
-    return geodesic_stage(geo, on_t, points, options, method, result.max_searches, name, progress,
-                          stats);
-  };
-  PairwiseStats stats_t, stats_s;
-  double queries = 0;  // Steiner queries: one per source
+  // Every set's points on T (drawn, or given and located), then on T'.
+  std::vector<std::vector<core::SurfacePoint>> on_t(sets), on_s(sets);
+  std::vector<std::string> stage_names(sets);
   for (std::size_t set = 0; set < sets; ++set) {
-    // The set's points on T (drawn, or given and located), then on T'.
-    std::vector<core::SurfacePoint> on_t;
     if (given) {
-      on_t = locate_all(*locate_t, options.sample_xy[set], options.snap_m, result.snapped,
-                        " points of " + set_name(set), "the DEM's footprint");
+      on_t[set] = locate_all(*locate_t, options.sample_xy[set], options.snap_m, result.snapped,
+                             " points of " + set_name(set), "the DEM's footprint");
     } else {
       const std::uint64_t seed =
           options.seed * 0x9E3779B97F4A7C15ull + static_cast<std::uint64_t>(set) + 1;
-      on_t = core::sample_uniform(original, static_cast<std::size_t>(options.points), seed);
+      on_t[set] = core::sample_uniform(original, static_cast<std::size_t>(options.points), seed);
     }
-    const std::size_t k = on_t.size();
-    std::vector<std::array<double, 2>> xy_t(k);
-    for (std::size_t i = 0; i < k; ++i) xy_t[i] = {on_t[i].x, on_t[i].y};
-    const std::vector<core::SurfacePoint> on_s = locate_all(
-        locate_s, xy_t, options.snap_m, result.snapped,
-        (given ? " points of " : " sample points of ") + set_name(set), "the mesh's footprint");
-    const std::string stage_name =
+    std::vector<std::array<double, 2>> xy_t(on_t[set].size());
+    for (std::size_t i = 0; i < xy_t.size(); ++i) xy_t[i] = {on_t[set][i].x, on_t[set][i].y};
+    on_s[set] = locate_all(locate_s, xy_t, options.snap_m, result.snapped,
+                           (given ? " points of " : " sample points of ") + set_name(set),
+                           "the mesh's footprint");
+    stage_names[set] =
         given ? set_name(set) + " (" + std::to_string(set + 1) + "/" + std::to_string(sets) + ")"
               : "set " + std::to_string(set + 1) + "/" + std::to_string(sets);
-    const std::string kind = options.exact ? ": exact geodesics on T" : ": geodesics on T";
-    auto t0 = std::chrono::steady_clock::now();
-    const std::vector<double> dt = geodesics(stage_name + kind, true, on_t, stats_t);
-    auto t1 = std::chrono::steady_clock::now();
-    const std::vector<double> ds = geodesics(stage_name + kind + "'", false, on_s, stats_s);
-    auto t2 = std::chrono::steady_clock::now();
-    result.original_s += std::chrono::duration<double>(t1 - t0).count();
-    result.simplified_s += std::chrono::duration<double>(t2 - t1).count();
-    queries += static_cast<double>(k);
-    score_set(dt, ds, k, set, set_name(set), options.keep_pairs, result);
+  }
+
+  // The geodesics, one mesh at a time: T' first (its graph, small, checks the mesh before the
+  // long work on T), then T, each graph freed before the next is built. Then, straightened,
+  // each pair's route on either mesh is tried on the other (shorten_along): T' is built again.
+  PairwiseStats stats_t, stats_s;
+  std::vector<std::vector<double>> dt(sets), ds(sets);
+  const bool routes = options.straighten && !options.exact;
+  std::vector<PairRoutes> routes_t(routes ? sets : 0), routes_s(routes ? sets : 0);
+  const std::string kind = options.exact ? ": exact geodesics on T" : ": geodesics on T";
+  for (const bool mesh_t : {false, true}) {
+    if (!options.exact) build_graph(geo, mesh_t, mesh_t ? original : simplified, result, stage);
+    for (std::size_t set = 0; set < sets; ++set) {
+      const std::string name = stage_names[set] + kind + (mesh_t ? "" : "'");
+      stage(name);
+      const auto t0 = std::chrono::steady_clock::now();
+      (mesh_t ? dt : ds)[set] =
+          geodesic_stage(geo, mesh_t, mesh_t ? on_t[set] : on_s[set], options, method,
+                         result.max_searches, name, progress, mesh_t ? stats_t : stats_s,
+                         routes ? &(mesh_t ? routes_t : routes_s)[set] : nullptr);
+      if (mesh_t && routes) {
+        result.shortened += shorten_along(*geo.graph_t, on_t[set], routes_s[set], dt[set]);
+        routes_s[set] = PairRoutes();
+      }
+      const double secs =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      (mesh_t ? result.original_s : result.simplified_s) += secs;
+    }
+  }
+  if (routes) {
+    const auto t0 = std::chrono::steady_clock::now();
+    build_graph(geo, false, simplified, result, stage);
+    for (std::size_t set = 0; set < sets; ++set) {
+      stage(stage_names[set] + ": routes of T on T'");
+      result.shortened += shorten_along(*geo.graph_s, on_s[set], routes_t[set], ds[set]);
+      routes_t[set] = PairRoutes();
+    }
+    result.simplified_s +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  geo = Geodesics();
+  double queries = 0;  // Steiner queries: one per source
+  for (std::size_t set = 0; set < sets; ++set) {
+    queries += static_cast<double>(on_t[set].size());
+    score_set(dt[set], ds[set], on_t[set].size(), set, set_name(set), options.keep_pairs, result);
   }
   result.original_one_way = stats_t.one_way_pairs;
   result.simplified_one_way = stats_s.one_way_pairs;

@@ -94,6 +94,31 @@ TEST_CASE("straightened paths on a tilted plane are straight lines", "[core][geo
   CHECK(s.stats().failed == 0);
 }
 
+TEST_CASE("a path along a given route is pulled taut: the segment on a plane",
+          "[core][geodesic][exact]") {
+  // Routes that wander (seen from above) still give the straight segment: on a plane every
+  // route is of one homotopy. A route that leaves the mesh gives no path.
+  const auto m = grid_surface(
+      15, 12, 30.0, [](double x, double y) { return 0.3 * x - 0.2 * y; }, 500000.0, 4500000.0);
+  const core::SteinerGraph g(m, 12.0);
+  core::PathStraightener s(g);
+  const auto pts = core::sample_uniform(m, 8, 7);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    for (std::size_t j = 0; j < pts.size(); ++j) {
+      if (j == i) continue;
+      CAPTURE(i, j);
+      const double mx = (pts[i].x + pts[j].x) / 2, my = (pts[i].y + pts[j].y) / 2;
+      // Halfway, 25 m aside (kept inside the 420 x 330 m grid).
+      const double side = mx < 500000.0 + 210 ? 25.0 : -25.0;
+      const std::vector<std::array<double, 2>> route{{mx + side, my}};
+      CHECK(s.along(pts[i], route, pts[j]) == Approx(dist3(pts[i], pts[j])).epsilon(1e-9));
+      CHECK(s.along(pts[i], {}, pts[j]) == Approx(dist3(pts[i], pts[j])).epsilon(1e-9));
+      const std::vector<std::array<double, 2>> off{{500000.0 - 100, my}};
+      CHECK(s.along(pts[i], off, pts[j]) < 0);
+    }
+  }
+}
+
 TEST_CASE("straightened paths over a ridge and a valley are straight when unfolded",
           "[core][geodesic][exact]") {
   // z = slope * |x - 150| (a ridge for slope < 0, a valley for slope > 0): unfolded, each side

@@ -96,8 +96,11 @@ TEST_CASE("the default spacing follows each mesh's edges, the paper's distances 
   const double edge_t = core::mean_edge_length(t), edge_s = core::mean_edge_length(s);
   REQUIRE(edge_s > 1.5 * edge_t);  // a 20 % TIN has longer edges
   const auto straightened = par::evaluate_distances(t, s, opt);
-  CHECK(straightened.delta_m == par::kStraightenedDeltaFactor * edge_t);
+  CHECK(straightened.delta_m == par::kStraightenedDeltaFactorDem * edge_t);
   CHECK(straightened.delta_mesh_m == par::kStraightenedDeltaFactor * edge_s);
+  // Never finer on T' than on T: T itself as the mesh gets T's spacing.
+  const auto itself = par::evaluate_distances(t, t, opt);
+  CHECK(itself.delta_mesh_m == itself.delta_m);
   CHECK(straightened.simplified_nodes ==
         core::SteinerGraph(s, straightened.delta_mesh_m).node_count());
   opt.straighten = false;
@@ -190,7 +193,7 @@ TEST_CASE("a memory budget bounds the searches at once, with the same figures",
   CHECK_THROWS_AS(par::evaluate_distances(t, s, opt), InputError);
   CHECK_THROWS_WITH(
       par::evaluate_distances(t, s, opt),
-      Catch::Matches("the geodesics need about .* \\(Steiner graphs .*, 2 searches of "
+      Catch::Matches("the geodesics need about .* \\(a Steiner graph of .*, 2 searches of "
                      ".*\\), more than the .* available \\(--max-memory\\); use a "
                      "larger --delta"));
 }
@@ -246,16 +249,27 @@ TEST_CASE("progress tells each stage as it starts and the sources searched in ge
   for (const auto& [stage, fraction] : calls) {
     if (fraction == 0) stages.push_back(stage);
   }
-  REQUIRE(stages.size() == 5);
-  CHECK(stages[0].rfind("Steiner graphs: T ", 0) == 0);
-  CHECK(stages[1] == "set 1/2: geodesics on T");
-  CHECK(stages[2] == "set 1/2: geodesics on T'");
-  CHECK(stages[3] == "set 2/2: geodesics on T");
-  CHECK(stages[4] == "set 2/2: geodesics on T'");
+  // One mesh at a time, T' first: its graph, its sets; then T's; then T' again for the routes
+  // found on T.
+  REQUIRE(stages.size() == 9);
+  CHECK(stages[0].rfind("Steiner graph of T': ", 0) == 0);
+  CHECK(stages[1] == "set 1/2: geodesics on T'");
+  CHECK(stages[2] == "set 2/2: geodesics on T'");
+  CHECK(stages[3].rfind("Steiner graph of T: ", 0) == 0);
+  CHECK(stages[4] == "set 1/2: geodesics on T");
+  CHECK(stages[5] == "set 2/2: geodesics on T");
+  CHECK(stages[6].rfind("Steiner graph of T': ", 0) == 0);
+  CHECK(stages[7] == "set 1/2: routes of T on T'");
+  CHECK(stages[8] == "set 2/2: routes of T on T'");
   // Each geodesic stage: its start, then one report per source, 1/12 to 12/12 in order.
-  std::size_t i = 1;  // past the graphs' stage
+  std::size_t i = 0;
   while (i < calls.size() && calls[i].second == 0) {
     const std::string stage = calls[i++].first;
+    // A graph's stage, or the routes': no sources searched.
+    if (stage.rfind("Steiner graph of ", 0) == 0 ||
+        stage.find(": routes of ") != std::string::npos) {
+      continue;
+    }
     for (int n = 1; n <= 12; ++n, ++i) {
       REQUIRE(i < calls.size());
       CHECK(calls[i].first == stage);
