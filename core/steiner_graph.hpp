@@ -76,7 +76,7 @@ class SteinerGraph {
       for (std::uint32_t k = corner_first_[node]; k < corner_first_[node + 1]; ++k) {
         const Corner& c = corners_[k];
         fn(c.along[0]);
-        fn(c.across_first);
+        if (c.across_first < c.across_end) fn(c.across_first);
       }
       return;
     }
@@ -84,8 +84,9 @@ class SteinerGraph {
     for (const Edge::Side& side : e.sides) {
       if (side.face == kNoFace) continue;
       fn(side.opposite);
-      fn(side.first[0]);
-      fn(side.first[1]);
+      // note: an empty run's first is no node of it (maybe one past the last node).
+      if (side.first[0] < side.end[0]) fn(side.first[0]);
+      if (side.first[1] < side.end[1]) fn(side.first[1]);
     }
   }
 
