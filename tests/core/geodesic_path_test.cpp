@@ -65,6 +65,14 @@ core::TriMesh rough_terrain() {
   return grid_surface(16, 14, 10.0, [&](double, double) { return height(rng); });
 }
 
+// The plane z = 0.3 x - 0.2 y on a 15 x 12 grid of 30 m cells (420 x 330 m) at UTM-sized
+// coordinates: x from kPlaneX0, y down from kPlaneY0.
+constexpr double kPlaneX0 = 500000.0, kPlaneY0 = 4500000.0;
+core::TriMesh tilted_utm_plane() {
+  return grid_surface(
+      15, 12, 30.0, [](double x, double y) { return 0.3 * x - 0.2 * y; }, kPlaneX0, kPlaneY0);
+}
+
 double dist3(const core::SurfacePoint& a, const core::SurfacePoint& b) {
   return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) +
                    (a.z - b.z) * (a.z - b.z));
@@ -75,8 +83,7 @@ double dist3(const core::SurfacePoint& a, const core::SurfacePoint& b) {
 TEST_CASE("straightened paths on a tilted plane are straight lines", "[core][geodesic][exact]") {
   // UTM-sized coordinates, and a graph of edges only (delta longer than every edge): the Steiner
   // path zig-zags along grid edges, the straightened one is the segment.
-  const auto m = grid_surface(
-      15, 12, 30.0, [](double x, double y) { return 0.3 * x - 0.2 * y; }, 500000.0, 4500000.0);
+  const auto m = tilted_utm_plane();
   const core::SteinerGraph g(m, 1000.0);
   core::PathStraightener s(g);
   const auto pts = core::sample_uniform(m, 12, 3);
@@ -98,8 +105,7 @@ TEST_CASE("a path along a given route is pulled taut: the segment on a plane",
           "[core][geodesic][exact]") {
   // Routes that wander (seen from above) still give the straight segment: on a plane every
   // route is of one homotopy. A route that leaves the mesh gives no path.
-  const auto m = grid_surface(
-      15, 12, 30.0, [](double x, double y) { return 0.3 * x - 0.2 * y; }, 500000.0, 4500000.0);
+  const auto m = tilted_utm_plane();
   const core::SteinerGraph g(m, 12.0);
   core::PathStraightener s(g);
   const auto pts = core::sample_uniform(m, 8, 7);
@@ -109,11 +115,11 @@ TEST_CASE("a path along a given route is pulled taut: the segment on a plane",
       CAPTURE(i, j);
       const double mx = (pts[i].x + pts[j].x) / 2, my = (pts[i].y + pts[j].y) / 2;
       // Halfway, 25 m aside (kept inside the 420 x 330 m grid).
-      const double side = mx < 500000.0 + 210 ? 25.0 : -25.0;
+      const double side = mx < kPlaneX0 + 210 ? 25.0 : -25.0;
       const std::vector<std::array<double, 2>> route{{mx + side, my}};
       CHECK(s.along(pts[i], route, pts[j]) == Approx(dist3(pts[i], pts[j])).epsilon(1e-9));
       CHECK(s.along(pts[i], {}, pts[j]) == Approx(dist3(pts[i], pts[j])).epsilon(1e-9));
-      const std::vector<std::array<double, 2>> off{{500000.0 - 100, my}};
+      const std::vector<std::array<double, 2>> off{{kPlaneX0 - 100, my}};
       CHECK(s.along(pts[i], off, pts[j]) < 0);
     }
   }
