@@ -68,10 +68,11 @@ is the mean over all pairs of |GD_T - GD_T'| / GD_T, where T is the DEM's full-r
 grid TIN and T' the mesh. Geodesics are searched on the paper's Steiner graph (points every
 delta along edges, each triangle's boundary points pairwise connected) with straight segments
 across faces (each label keeps the point its segment starts from and the part of its edge that
-point sees), then each path is unfolded and pulled taut into an exact, locally shortest
-geodesic, and each pair's route on either mesh is also pulled taut on the other, the shorter
-kept: under 0.01 % above exact on average on real DEMs at the default delta, and the measure
-within 1.6 % of the exact one (--steiner keeps the paper's Steiner distances, 0.7 % above).
+point sees), each pair's two searches meeting in the middle, then each path is unfolded and
+pulled taut into an exact, locally shortest geodesic, and each pair's route on either mesh is
+also pulled taut on the other, the shorter kept: under 0.01 % above exact on average on real
+DEMs at the default delta, and the measure within 1.5 % of the exact one (--steiner keeps the
+paper's Steiner distances, 0.7 % above).
 The result is the mean over independent sets. Also reports the mesh's validity over
 the DEM (orientation, coverage, faces over no-data) and its vertical error at every valid
 cell centre.
@@ -107,9 +108,9 @@ cell centre.
                      about 0.75 s and 250 MB on a 100 x 100 grid, one per thread at once (not
                      bounded: --max-memory and --delta are refused with it); the mesh must be a
                      manifold surface with consistent orientation (no folded faces)
-  --steiner          the paper's Steiner distances, not straightened (searched meeting in
-                     the middle: faster, but 0.7 % long on average at the default delta, a
-                     bias as large as the error measured on good meshes)
+  --steiner          the paper's Steiner distances, not straightened (faster, but 0.7 %
+                     long on average at the default delta, a bias as large as the error
+                     measured on good meshes)
   --delta D          Steiner spacing in metres on both meshes (default: 0.5 x the mean edge
                      length of T, and 0.35 x that of the mesh but not less than T's; with
                      --steiner 0.25 x that of T on both); smaller finds the shortest route in

@@ -418,7 +418,9 @@ void PathStraightener::bends_route(std::vector<std::array<double, 2>>& route) co
 
 double PathStraightener::along(const SurfacePoint& source,
                                const std::vector<std::array<double, 2>>& route,
-                               const SurfacePoint& target) {
+                               const SurfacePoint& target,
+                               std::vector<std::array<double, 2>>* bends) {
+  if (bends) bends->clear();
   const TriMesh& m = g_.mesh();
   auto xy = [&](std::uint32_t v) { return std::array<double, 2>{m.xyz[3 * v], m.xyz[3 * v + 1]}; };
   auto orient = [](std::array<double, 2> a, std::array<double, 2> b, std::array<double, 2> c) {
@@ -493,7 +495,9 @@ double PathStraightener::along(const SurfacePoint& source,
     }
     if (nodes.empty() || nodes.back() != pick) nodes.push_back(pick);
   }
-  return length(source, nodes, target);
+  const double len = length(source, nodes, target);
+  if (bends && len >= 0) bends_route(*bends);
+  return len;
 }
 
 }  // namespace dpts::core

@@ -46,9 +46,9 @@ class PathStraightener {
   // (points seen from above, in order from source to target, such as another mesh's path
   // between the same points): the graph node nearest each crossing of the route with an edge,
   // straightened as in length(). Negative where the route leaves the mesh or does not end in
-  // the target's face.
+  // the target's face. With bends, the straightened path's route into it (as shortest()).
   double along(const SurfacePoint& source, const std::vector<std::array<double, 2>>& route,
-               const SurfacePoint& target);
+               const SurfacePoint& target, std::vector<std::array<double, 2>>* bends = nullptr);
 
   // What the calls so far did: paths straightened, strips pulled taut (one per pass), vertices
   // rerouted around, and paths that could not be straightened.

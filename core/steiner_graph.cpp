@@ -78,6 +78,8 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
   link_edges();
   bound_segments();
   build_corners();
+  // note: the edge records hold each edge's nodes from here on.
+  edge_first_ = std::vector<std::uint32_t>();
 }
 
 // The vertices' nodes, then each edge (from the sorted face edges, two faces at most) with its
@@ -235,7 +237,7 @@ void SteinerGraph::face_nodes(std::uint32_t f, std::vector<std::uint32_t>& out) 
   for (int i = 0; i < 3; ++i) out.push_back(mesh_.faces[f][i]);
   for (int i = 0; i < 3; ++i) {
     const std::uint32_t e = face_edges_[f][i];
-    for (std::uint32_t n = edge_first_[e]; n < edge_first_[e + 1]; ++n) out.push_back(n);
+    for (std::uint32_t n = edges_[e].first; n < edges_[e].end; ++n) out.push_back(n);
   }
 }
 
@@ -246,9 +248,9 @@ void SteinerGraph::edge_nodes(std::uint32_t f, int i, std::vector<std::uint32_t>
   out.push_back(a);
   // note: an edge's Steiner nodes run from its lower vertex id to its higher.
   if (a < b) {
-    for (std::uint32_t n = edge_first_[e]; n < edge_first_[e + 1]; ++n) out.push_back(n);
+    for (std::uint32_t n = edges_[e].first; n < edges_[e].end; ++n) out.push_back(n);
   } else {
-    for (std::uint32_t n = edge_first_[e + 1]; n-- > edge_first_[e];) out.push_back(n);
+    for (std::uint32_t n = edges_[e].end; n-- > edges_[e].first;) out.push_back(n);
   }
   out.push_back(b);
 }
@@ -338,7 +340,8 @@ BucketQueue::BucketQueue(const SteinerGraph& graph)
 
 void BucketQueue::reset(std::size_t nodes) {
   for (auto& b : ring_) b.clear();
-  label_.assign(nodes, {std::numeric_limits<double>::infinity(), 0, LabelHeap::kNone});
+  dist_.assign(nodes, std::numeric_limits<double>::infinity());
+  pred_.assign(nodes, LabelHeap::kNone);
   bucket_ = 0;
   next_ = 0;
   queued_ = 0;
@@ -355,12 +358,14 @@ bool BucketQueue::pop(Entry& out) {
       ++bucket_;
       continue;
     }
-    const std::uint32_t node = bucket[next_++];
+    const Entry e = bucket[next_++];
     --queued_;
-    Label& l = label_[node];
-    if (std::signbit(l.dist)) continue;  // lowered since, and settled from an earlier bucket
-    out = {l.dist, node, l.tag};
-    l.dist = -l.dist;
+    double& l = dist_[e.node];
+    // note: settled (negative), or lowered since (an older entry). A key is never set twice
+    // (each lowering is strictly lower), so one entry matches.
+    if (l != e.key) continue;
+    out = e;
+    l = -l;
     return true;
   }
   return false;
@@ -374,9 +379,10 @@ GeodesicQuery::GeodesicQuery(const SteinerGraph& graph, bool use_buckets) : g_(g
 
 std::size_t GeodesicQuery::estimate_bytes(std::size_t nodes, std::size_t faces, std::size_t targets,
                                           bool anchored) {
-  // note: the buckets hold the queued nodes (the search's frontier, far fewer than the nodes);
-  // an eighth of a label per node bounds them on the meshes measured.
-  return (nodes + targets) * 16 + nodes * 2 + faces / 8 + targets * 24 +
+  // note: the buckets hold the queued entries (the search's frontier, far fewer than the
+  // nodes); a quarter of an entry per node bounds them on the meshes measured. The heap, for
+  // the graphs that cannot have buckets, holds 16 bytes a node, the buckets' 12 and entries.
+  return (nodes + targets) * 12 + nodes * 4 + faces / 8 + targets * 24 +
          (anchored ? nodes * sizeof(Anchor) : 0);
 }
 
@@ -600,7 +606,10 @@ class GeodesicQuery::Anchored {
     g_.face_nodes(source.face, q_.nodes_);
     for (std::uint32_t v : q_.nodes_) {
       const P3 v3 = pt(g_.position(v));
-      if (improve(v, norm(sub(v3, s3)), source.face, LabelHeap::kNone)) set_anchor(v, v3, s3);
+      if (improve(v, norm(sub(v3, s3)), source.face, LabelHeap::kNone)) {
+        set_anchor(v, v3, s3);
+        set_bend(v, LabelHeap::kNone);
+      }
     }
     cx_.straight = false;
     relax_targets(source.face, src, 0.0, LabelHeap::kNone);
@@ -634,6 +643,15 @@ class GeodesicQuery::Anchored {
   static constexpr double kInf = std::numeric_limits<double>::infinity();
 
   static bool has_anchor(const Anchor& an) { return an.lo <= an.hi; }
+  // A window's ends as stored (fractions of the edge, rounded outwards) and back.
+  static constexpr double kWindowSteps = 65535.0;
+  static std::uint16_t window_lo(double f) {
+    return static_cast<std::uint16_t>(std::clamp(std::floor(f * kWindowSteps), 0.0, kWindowSteps));
+  }
+  static std::uint16_t window_hi(double f) {
+    return static_cast<std::uint16_t>(std::clamp(std::ceil(f * kWindowSteps), 0.0, kWindowSteps));
+  }
+  static double fraction(std::uint16_t q) { return q / kWindowSteps; }
   // Node v (at v3) gets anchor point a (offsets from v).
   static void place(Anchor& an, P3 v3, P3 a) {
     an.off[0] = static_cast<float>(a.x - v3.x);
@@ -654,8 +672,8 @@ class GeodesicQuery::Anchored {
     if (v < nv_) return;
     Anchor& an = anchor(v);
     place(an, v3, a);
-    an.lo = 0.0f;
-    an.hi = std::numeric_limits<float>::infinity();
+    an.lo = 0;
+    an.hi = static_cast<std::uint16_t>(kWindowSteps);
   }
   bool improve(std::uint32_t v, double nd, std::uint32_t via, std::uint32_t from) {
     const double old = queue_.dist(v);
@@ -663,6 +681,19 @@ class GeodesicQuery::Anchored {
     if (old == kInf && v < n_) g_.prefetch(v);
     queue_.decrease(v, nd, via, from);
     return true;
+  }
+  // With tracking, the bend of node v's new label (GeodesicQuery::bend()).
+  void set_bend(std::uint32_t v, std::uint32_t bend) {
+    if (!q_.track_bends_) return;
+    (v < nv_ ? q_.vertex_bends_[v] : anchor(v).bend) = bend;
+  }
+  // The bend of a node reached straight from u's anchor (u at distance d, the node at nd): u's,
+  // or u itself where it is the node last before a waypoint (with tracking; else none).
+  std::uint32_t bend_of(std::uint32_t u, double d, double nd) const {
+    if (!q_.track_bends_) return LabelHeap::kNone;
+    const double per = q_.per_waypoint_;
+    if (per > 0 && std::floor(nd * per) != std::floor(d * per)) return u;
+    return q_.bend(u);
   }
 
   // Relaxing across a Steiner node's edge (a, b) into face f (corner o): a frame in f's plane
@@ -713,8 +744,8 @@ class GeodesicQuery::Anchored {
                  cx.a.z + cx.sa * cx.ex.z - cx.h * cx.ny.z};
     cx.da = anchor_dist(pt(up), A, d);
     const double tol = 1e-7 * cx.len;
-    cx.lo = an.lo - tol;
-    cx.hi = std::min<double>(an.hi, cx.len) + tol;
+    cx.lo = fraction(an.lo) * cx.len - tol;
+    cx.hi = fraction(an.hi) * cx.len + tol;
     cx.straight = true;
   }
   // Where the segment from cx_'s anchor to the point at (sp, yp) in cx_'s frame crosses the
@@ -747,7 +778,6 @@ class GeodesicQuery::Anchored {
       std::swap(s0, s1);
       std::swap(y0, y1);
     }
-    const double len = on_ao ? cx.ao : cx.bo;
     const double c0 = crossing2(s0, y0), c1 = crossing2(s1, y1);
     auto solve = [&](double c) {
       const double den = (s1 - s0) * cx.h - (c - cx.sa) * (y1 - y0);
@@ -763,8 +793,8 @@ class GeodesicQuery::Anchored {
       thi = cx.lo <= c1 ? 1.0 : cx.lo >= c0 ? 0.0 : solve(cx.lo);
     }
     place(an, v3, cx.anchor);
-    an.lo = static_cast<float>(std::min(tlo, thi) * len);
-    an.hi = static_cast<float>(std::max(tlo, thi) * len);
+    an.lo = window_lo(std::min(tlo, thi));
+    an.hi = window_hi(std::max(tlo, thi));
   }
   // The distance to point p through cx_ (or bent at u, at distance d).
   double through(const double* up, double d, P3 p) const {
@@ -794,7 +824,10 @@ class GeodesicQuery::Anchored {
     const P3 uv = sub(v3, u3);
     const double w2 = dot(uv, uv), gap = old - d;
     if (!(gap > 0) || w2 >= gap * gap) return;
-    if (improve(v, d + std::sqrt(w2), via, u)) set_anchor(v, v3, u3);
+    if (improve(v, d + std::sqrt(w2), via, u)) {
+      set_anchor(v, v3, u3);
+      set_bend(v, u);
+    }
   }
   // Graph node v joined to settled node u through face `via` (or along u's edge): straight from
   // u's anchor where the window lets it, else bent at u. `face`: the face cx_ is set up for.
@@ -809,17 +842,22 @@ class GeodesicQuery::Anchored {
       // Along u's own edge: straight from u's anchor where its window holds v.
       if (u >= nv_ && has_anchor(anchor(u))) {
         const Anchor& an = anchor(u);
-        const auto ends = g_.node_edge_ends(u);
-        const P3 a = pt(g_.position(ends[0]));
-        const double sv = norm(sub(v3, a));
-        const double tol = 1e-7 * (sv + norm(sub(u3, a)));
-        if (sv >= an.lo - tol && sv <= an.hi + tol) {
+        // note: the window in fractions of the edge, which v's place along it is exactly.
+        const double fv = g_.edge_fraction(u, v);
+        constexpr double tol = 1e-7;
+        if (fv >= fraction(an.lo) - tol && fv <= fraction(an.hi) + tol) {
           const P3 A = anchor_of(u, up);
           const double da = anchor_dist(u3, A, d);
-          if (improve(v, da + norm(sub(v3, A)), via, u) && v >= nv_) {
-            Anchor& av = anchor(v);
-            av = an;
-            place(av, v3, A);
+          const double nd = da + norm(sub(v3, A));
+          const std::uint32_t bend = bend_of(u, d, nd);
+          if (improve(v, nd, via, u)) {
+            if (v >= nv_) {
+              Anchor& av = anchor(v);
+              av.lo = an.lo;
+              av.hi = an.hi;
+              place(av, v3, A);
+            }
+            set_bend(v, bend);
           }
           return;
         }
@@ -840,7 +878,11 @@ class GeodesicQuery::Anchored {
       double sp, yp;
       const double c = crossing(v3, sp, yp);
       if (c >= cx_.lo && c <= cx_.hi) {
-        if (improve(v, cx_.da + std::sqrt(w2), via, u)) carry(v, v3, sp, yp);
+        const double nd = cx_.da + std::sqrt(w2);
+        if (improve(v, nd, via, u)) {
+          carry(v, v3, sp, yp);
+          set_bend(v, bend_of(u, d, nd));
+        }
         return;
       }
     }
@@ -866,6 +908,9 @@ void GeodesicQuery::run_anchored(Queue& queue, const SurfacePoint& source,
   // note: Steiner nodes only (a vertex has no anchor).
   const std::size_t steiner = g_.steiner_count();
   if (anchors_.size() != steiner) anchors_.resize(steiner);
+  // note: no reset: a node's bend is written with every label it gets, read only once reached.
+  if (track_bends_ && vertex_bends_.size() != n - steiner) vertex_bends_.resize(n - steiner);
+  if (!track_bends_) vertex_bends_ = HugeVector<std::uint32_t>();
   index_targets(targets);
   queue.reset(n + targets.size());
   Anchored<Queue> search(*this, queue, targets);

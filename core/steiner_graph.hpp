@@ -112,6 +112,14 @@ class SteinerGraph {
     if (node < mesh_.vertex_count()) return {node, node};
     return edges_[edge_of(node)].ends;
   }
+  // Where node v lies along Steiner node u's edge (v: one of its nodes or ends), as a fraction
+  // of its length from its first end (the Steiner points are spaced evenly).
+  double edge_fraction(std::uint32_t u, std::uint32_t v) const {
+    const Edge& e = edges_[edge_of(u)];
+    if (v == e.ends[0]) return 0.0;
+    if (v == e.ends[1]) return 1.0;
+    return static_cast<double>(v - e.first + 1) / static_cast<double>(e.end - e.first + 1);
+  }
   // The corner of face f off a Steiner node's edge (f: one of the edge's faces).
   std::uint32_t opposite(std::uint32_t node, std::uint32_t f) const {
     const Edge& e = edges_[edge_of(node)];
@@ -194,7 +202,7 @@ class SteinerGraph {
   HugeVector<std::uint32_t> node_edge_;      // per Steiner node (node - nv_): its edge
   std::uint32_t nv_ = 0;                     // the mesh's vertices
   std::vector<std::array<std::uint32_t, 3>> face_edges_;  // edge of (v0,v1), (v1,v2), (v2,v0)
-  std::vector<std::uint32_t> edge_first_;                 // first Steiner node of each edge, + end
+  std::vector<std::uint32_t> edge_first_;  // while building: each edge's first node, + end
   // note: Dijkstra's time goes into cache misses, one per dependent load; so what a settled node
   // needs is gathered in one record: an edge's (one cache line) for a Steiner point, its
   // corners' (contiguous) for a vertex.
@@ -269,8 +277,9 @@ class LabelHeap {
 // Dijkstra's tentative distances in buckets of width at most the shortest graph edge (Dial's
 // queue, for real weights): a node taken from the lowest bucket can be lowered by no node of
 // that bucket, so a bucket's nodes may be settled in any order and each push and pop is O(1).
-// Lowered nodes stay behind in their old bucket and are skipped there. The buckets live in a
-// ring that spans the longest edge, which bounds the spread of the queued distances.
+// Each lowering queues an entry (key, node, tag); the node's older entries are skipped when
+// popped (their key is no longer its distance). The buckets live in a ring that spans the
+// longest edge, which bounds the spread of the queued distances.
 class BucketQueue {
  public:
   using Entry = LabelHeap::Entry;
@@ -280,25 +289,20 @@ class BucketQueue {
   explicit BucketQueue(const SteinerGraph& graph);
   void reset(std::size_t nodes);
   // The node's tentative distance; below zero once settled, so no relaxation improves it.
-  double dist(std::uint32_t node) const { return label_[node].dist; }
+  double dist(std::uint32_t node) const { return dist_[node]; }
   double settled_dist(std::uint32_t node) const {
-    const double l = label_[node].dist;
+    const double l = dist_[node];
     return std::signbit(l) ? -l : std::numeric_limits<double>::infinity();
   }
   void decrease(std::uint32_t node, double key, std::uint32_t tag, std::uint32_t pred) {
-    Label& l = label_[node];
     // note: b >= bucket_ (a distance never falls below the bucket being emptied: its nodes are
     // at least one width from the others) but for rounding, which the max guards against; and
     // b < bucket_ + ring size (no edge is longer than max_segment()). The width's margin covers
     // the rounding of multiplying by its inverse.
     const std::uint64_t b = bucket_of(key);
-    // A node lowered within its bucket is there already.
-    const bool queued = l.dist < std::numeric_limits<double>::infinity() && bucket_of(l.dist) == b;
-    l.dist = key;
-    l.tag = tag;
-    l.pred = pred;
-    if (queued) return;
-    ring_[b & mask_].push_back(node);
+    dist_[node] = key;
+    pred_[node] = pred;
+    ring_[b & mask_].push_back({key, node, tag});
     ++queued_;
   }
   // A node of the lowest bucket with its distance and tag into out, marked settled; false when
@@ -306,33 +310,32 @@ class BucketQueue {
   bool pop(Entry& out);
   std::uint32_t next_hint(std::size_t ahead) const {
     const auto& b = ring_[bucket_ & mask_];
-    return next_ + ahead < b.size() ? b[next_ + ahead] : LabelHeap::kNone;
+    return next_ + ahead < b.size() ? b[next_ + ahead].node : LabelHeap::kNone;
   }
-  void prefetch_label(std::uint32_t node) const { __builtin_prefetch(&label_[node]); }
-  std::uint32_t pred(std::uint32_t node) const { return label_[node].pred; }
+  void prefetch_label(std::uint32_t node) const {
+    __builtin_prefetch(&dist_[node]);
+    __builtin_prefetch(&pred_[node], 1);
+  }
+  std::uint32_t pred(std::uint32_t node) const { return pred_[node]; }
   // Lets a popped node be lowered again: a target, whose last segment may be shorter than the
   // width, by a later node of the same bucket.
-  void reopen(std::uint32_t node) { label_[node].dist = std::fabs(label_[node].dist); }
+  void reopen(std::uint32_t node) { dist_[node] = std::fabs(dist_[node]); }
   // Ends the search once the current bucket is emptied: a distance popped from it is final
   // only then (a target's last segment may be shorter than the width).
   void finish() { finished_ = true; }
 
  private:
-  // note: a settled node's distance is negated. A node is in one bucket at most once: lowered
-  // into an earlier bucket it is queued there too and its old entry skipped later (settled).
-  struct Label {
-    double dist;
-    std::uint32_t tag;
-    std::uint32_t pred;  // the node its distance came from (fills the label's padding)
-  };
+  // note: a settled node's distance is negated. The tag rides in the queued entries, so a
+  // node holds 12 bytes (its distance and the node it came from), not 16.
   // The bucket a distance goes into: never one already emptied.
   std::uint64_t bucket_of(double key) const {
     return std::max(static_cast<std::uint64_t>(key * per_width_), bucket_);
   }
   double per_width_;  // 1 / bucket width
-  std::vector<std::vector<std::uint32_t>> ring_;
+  std::vector<std::vector<Entry>> ring_;
   std::uint64_t mask_;  // ring size - 1
-  HugeVector<Label> label_;
+  HugeVector<double> dist_;
+  HugeVector<std::uint32_t> pred_;
   std::uint64_t bucket_ = 0;  // the bucket being emptied
   std::size_t next_ = 0;      // its next entry
   std::size_t queued_ = 0;    // entries in the ring, skipped ones included
@@ -348,7 +351,7 @@ class GeodesicQuery {
   explicit GeodesicQuery(const SteinerGraph& graph, bool use_buckets = true);
 
   // The memory (bytes) of one query on a graph of `nodes` nodes over `faces` faces with
-  // `targets` targets: its labels (16 bytes per node and target), a bit per face and the
+  // `targets` targets: its labels (12 bytes per node and target), a bit per face and the
   // targets' lists by face, and the queue's buckets.
   // An anchored query (set_anchored) needs sizeof(Anchor) more per Steiner node (counted here
   // per node).
@@ -393,6 +396,23 @@ class GeodesicQuery {
   // distances much nearer the exact geodesics than the graph's own, at a coarser delta.
   void set_anchored(bool anchored) { anchored_ = anchored; }
   bool anchored() const { return anchored_; }
+  // With an anchored search: each label also keeps the node its path last bent at (4 bytes a
+  // node more), so that a settled node's path can be told by its bends alone (bend()), after
+  // the search's other labels are gone.
+  // With waypoint_every > 0, a path is also told to pass the node it reached last before each
+  // multiple of that distance (a waypoint, kept as a bend): so that between two, its route seen
+  // from above strays little from the straight line.
+  void set_track_bends(bool track, double waypoint_every = 0) {
+    track_bends_ = track;
+    per_waypoint_ = waypoint_every > 0 ? 1 / waypoint_every : 0;
+  }
+  // The node the path of a node the last (anchored, tracking) query reached last bent at
+  // before it (LabelHeap::kNone: none, straight from the source); the path runs straight (in
+  // the unfolding of the faces it crosses) from there to the node.
+  std::uint32_t bend(std::uint32_t node) const {
+    const std::size_t nv = g_.mesh().vertex_count();
+    return node < nv ? vertex_bends_[node] : anchors_[node - nv].bend;
+  }
 
   // Graph nodes the last query settled (the area it searched).
   std::size_t settled() const { return settled_; }
@@ -450,16 +470,21 @@ class GeodesicQuery {
   std::vector<std::uint32_t> nodes_;
   std::size_t settled_ = 0;
   bool anchored_ = false;
+  bool track_bends_ = false;
+  double per_waypoint_ = 0;
   // An anchored label: the point its straight segment starts from (offset from the node, in
-  // the plane of the face it came through), and the part of the node's edge (metres from its
-  // first end) the point sees through the faces crossed. Steiner nodes only: a path through a
+  // the plane of the face it came through), and the part of the node's edge the point sees
+  // through the faces crossed, as fractions of the edge from its first end in 1/65535ths
+  // (rounded outwards); with track_bends_, its bend. Steiner nodes only: a path through a
   // vertex bends there. note: the point's own distance is not kept: it is the node's less the
   // offset's length (20 bytes a node, not 32).
   struct Anchor {
     float off[3];
-    float lo, hi;
+    std::uint16_t lo, hi;
+    std::uint32_t bend;
   };
   HugeVector<Anchor> anchors_;
+  HugeVector<std::uint32_t> vertex_bends_;  // with track_bends_, the vertices' bends
 };
 
 }  // namespace dpts::core

@@ -86,6 +86,9 @@ Tin grid_tin(const HeightGrid& g, Diagonal diagonal) {
   // Surface cell -> vertex index.
   std::vector<std::uint32_t> index(g.cell_count(), 0xFFFFFFFFu);
   for (std::uint32_t i = 0; i < t.cells.size(); ++i) index[t.cells[i]] = i;
+  // note: two faces a cell at most; grown by push_back the array would hold up to twice that.
+  t.faces.reserve(2 * static_cast<std::size_t>(std::max(g.width - 1, 0)) *
+                  static_cast<std::size_t>(std::max(g.height - 1, 0)));
   for (int r = 0; r + 1 < g.height; ++r) {
     for (int c = 0; c + 1 < g.width; ++c) {
       // Corners: a = (c,r) NW, b = (c+1,r) NE, s = (c,r+1) SW, d = (c+1,r+1) SE.
@@ -108,6 +111,7 @@ Tin grid_tin(const HeightGrid& g, Diagonal diagonal) {
       }
     }
   }
+  t.faces.shrink_to_fit();
   return t;
 }
 

@@ -33,6 +33,11 @@ namespace {
 
 using Shell = std::vector<std::pair<std::uint32_t, double>>;
 
+// Straightened meeting (meet_straightened): the most meeting nodes whose routes are pulled taut
+// for one pair, and how much longer than the best one's their sum may be.
+constexpr std::size_t kMeetingRoutes = 4;
+constexpr double kNearTie = 0.01;
+
 // Squared straight-line (3D) distance between points i and j.
 double straight2(const std::vector<core::SurfacePoint>& points, std::size_t i, std::size_t j) {
   const double dx = points[i].x - points[j].x, dy = points[i].y - points[j].y,
@@ -221,8 +226,12 @@ std::vector<double> meeting_radii(const std::vector<double>& c, std::size_t k) {
 }
 
 // The most searches pairwise_distances holds at once with no bound given: besides one per
-// thread, up to two more each, waiting for their joins, so that a thread rarely idles.
-std::size_t unbounded_searches(std::size_t threads) { return 3 * threads - 1; }
+// thread, up to two more each, waiting for their joins, so that a thread rarely idles; but
+// straightened, one per thread (each holds 36 bytes a node, not 16: the memory is the limit;
+// smallest radius first, a search rarely ends before the one started before it).
+std::size_t unbounded_searches(std::size_t threads, bool straighten) {
+  return straighten ? std::max<std::size_t>(threads, 2) : 3 * threads - 1;
+}
 
 // The first `pilots` points searched in full (in parallel), their distances into direct and
 // their searches' sizes into settled_by: the estimate the meeting radii need, the largest ratio
@@ -301,6 +310,381 @@ std::size_t settle_pairs(const std::vector<double>& direct, const std::vector<do
   return left_count;
 }
 
+// Where a source's search ended, for straightened meeting: its settled nodes within the
+// longest segment of its radius (its shell), each with its distance and the node its path last
+// bent at (GeodesicQuery::bend), by node; and the bends of those paths, each with the bend
+// before it, by node. So each shell node's path from the source is told by its bends alone,
+// after the search's labels are gone.
+struct Half {
+  // note: the distance as a float (12 bytes a node): it only ranks the meeting nodes, whose
+  // paths are then pulled taut.
+  struct Node {
+    std::uint32_t node, bend;
+    float d;
+  };
+  std::vector<Node> shell;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> bends;
+
+  Half() = default;
+  // The half of the search q (over a graph of `nodes` nodes) has just done: the nodes of its
+  // outer shell that `keep` (a later search may reach them).
+  template <typename Keep>
+  Half(const core::GeodesicQuery& q, std::size_t nodes, const Shell& outer, Keep&& keep) {
+    for (const auto& [v, d] : outer) {
+      if (keep(v)) shell.push_back({v, q.bend(v), static_cast<float>(d)});
+    }
+    shell.shrink_to_fit();
+    // note: by node, so that the joins read the later search's labels in address order.
+    std::sort(shell.begin(), shell.end(),
+              [](const Node& a, const Node& b) { return a.node < b.node; });
+    // note: the paths share their first bends: each path is followed until a bend seen
+    // already (marked in a bitmap over the nodes, per thread, cleared after).
+    thread_local std::vector<std::uint64_t> seen;
+    if (seen.size() < nodes / 64 + 1) seen.assign(nodes / 64 + 1, 0);
+    auto mark = [&](std::uint32_t b) {
+      std::uint64_t& word = seen[b >> 6];
+      const std::uint64_t bit = std::uint64_t{1} << (b & 63);
+      const bool was = word & bit;
+      word |= bit;
+      return !was;
+    };
+    for (const Node& n : shell) {
+      for (std::uint32_t b = n.bend; b != core::LabelHeap::kNone && mark(b); b = q.bend(b)) {
+        bends.emplace_back(b, q.bend(b));
+      }
+    }
+    for (const auto& b : bends) seen[b.first >> 6] = 0;
+    std::sort(bends.begin(), bends.end());
+    bends.shrink_to_fit();
+  }
+
+  // The bends of shell node t's path, from the source's end, into out (cleared).
+  void path_bends(std::size_t t, std::vector<std::uint32_t>& out) const {
+    out.clear();
+    for (std::uint32_t b = shell[t].bend; b != core::LabelHeap::kNone;) {
+      out.push_back(b);
+      const auto it = std::lower_bound(bends.begin(), bends.end(),
+                                       std::pair<std::uint32_t, std::uint32_t>{b, 0});
+      b = it != bends.end() && it->first == b ? it->second : core::LabelHeap::kNone;
+    }
+    std::reverse(out.begin(), out.end());
+  }
+};
+
+// A route (points seen from above, from point i to j) as PairRoutes keeps it for the pair
+// min(i, j) < max(i, j): offsets from origin, from the lower to the higher, then that point.
+std::vector<std::array<float, 2>> stored_route(const std::vector<core::SurfacePoint>& points,
+                                               const std::array<double, 2>& origin, std::size_t i,
+                                               std::size_t j,
+                                               const std::vector<std::array<double, 2>>& route) {
+  auto offset = [&](double x, double y) {
+    return std::array<float, 2>{static_cast<float>(x - origin[0]),
+                                static_cast<float>(y - origin[1])};
+  };
+  std::vector<std::array<float, 2>> r;
+  r.reserve(route.size() + 1);
+  for (const auto& p : route) r.push_back(offset(p[0], p[1]));
+  if (i > j) std::reverse(r.begin(), r.end());
+  const core::SurfacePoint& end = points[std::max(i, j)];
+  r.push_back(offset(end.x, end.y));
+  return r;
+}
+
+// Straightened pairs meeting in the middle (PairwiseMethod::kMeet with straighten): the same
+// radii as pairwise_in_arena's, with anchored searches. A pair one search settles is
+// straightened on its labels (PathStraightener::shortest; both ways where both do). A pair
+// the two searches meet on is joined as there, then its path is pulled taut along the route
+// through the meeting node: the earlier search's part told by its bends (Half), the later's
+// node by node; and along the best meeting node at least a few segments away from it, if
+// nearly as short (where two routes around a hill are nearly equal, the graph's error may
+// rank the longer first). The shortest is kept. Pairs left are measured one way.
+std::vector<double> meet_straightened(const core::SteinerGraph& graph,
+                                      const std::vector<core::SurfacePoint>& points,
+                                      PairRoutes* routes_out, PairwiseStats& stats,
+                                      std::size_t tokens, const std::function<void()>& searched) {
+  const std::size_t k = points.size();
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<double> out(k * k, 0.0);
+  const std::array<double, 2> origin{points[0].x, points[0].y};
+  if (routes_out) {
+    routes_out->origin = origin;
+    routes_out->xy.assign(k * k, {});
+  }
+  // Each pair's candidates: straightened from i's search (i * k + j), and joined (a < b).
+  std::vector<double> direct(k * k, inf), direct_len(k * k, inf), joined_len(k * k, inf);
+  std::vector<std::vector<std::array<float, 2>>> direct_route(routes_out ? k * k : 0),
+      joined_route(routes_out ? k * k : 0);
+  std::vector<std::size_t> settled_by(k, 0);
+  tbb::enumerable_thread_specific<std::unique_ptr<core::PathStraightener>> straighteners;
+  auto straightener = [&]() -> core::PathStraightener& {
+    auto& st = straighteners.local();
+    if (!st) st = std::make_unique<core::PathStraightener>(graph);
+    return *st;
+  };
+  auto others = [&](std::size_t i) {
+    std::vector<core::SurfacePoint> t;
+    for (std::size_t j = 0; j < k; ++j) {
+      if (j != i) t.push_back(points[j]);
+    }
+    return t;
+  };
+  // Source i's search done (distances d to the others): the targets it settled, straightened.
+  auto straighten_direct = [&](const core::GeodesicQuery& q, std::size_t i,
+                               const std::vector<core::SurfacePoint>& targets,
+                               const std::vector<double>& d) {
+    core::PathStraightener& st = straightener();
+    std::vector<std::array<double, 2>> best;
+    for (std::size_t j = 0, t = 0; j < k; ++j) {
+      if (j == i) continue;
+      direct[i * k + j] = d[t];
+      if (std::isfinite(d[t])) {
+        direct_len[i * k + j] =
+            st.shortest(q, points[i], t, targets[t], d[t], routes_out ? &best : nullptr);
+        if (routes_out) direct_route[i * k + j] = stored_route(points, origin, i, j, best);
+      }
+      ++t;
+    }
+  };
+
+  // The pilots: searched in full, their distances estimate the radii.
+  constexpr std::size_t kPilots = 2;
+  const std::size_t pilots = std::min(kPilots, k);
+  std::vector<double> pilot_ratio(pilots, 1.0);
+  tbb::parallel_for(std::size_t{0}, pilots, [&](std::size_t p) {
+    core::GeodesicQuery q(graph);
+    q.set_anchored(true);
+    const auto targets = others(p);
+    std::vector<double> d;
+    q.distances(points[p], targets, d);
+    settled_by[p] = q.settled();
+    straighten_direct(q, p, targets, d);
+    std::vector<std::pair<double, double>> far;  // (straight, geodesic)
+    for (std::size_t j = 0, t = 0; j < k; ++j) {
+      if (j != p) far.emplace_back(std::sqrt(straight2(points, p, j)), d[t++]);
+    }
+    std::sort(far.begin(), far.end());
+    for (std::size_t t = far.size() / 2; t < far.size(); ++t) {
+      if (far[t].first > 0 && std::isfinite(far[t].second)) {
+        pilot_ratio[p] = std::max(pilot_ratio[p], far[t].second / far[t].first);
+      }
+    }
+    if (searched) searched();
+  });
+  const double ratio = *std::max_element(pilot_ratio.begin(), pilot_ratio.end());
+  const double w = graph.max_segment();
+  const std::vector<double> radius = search_radii(points, pilots, ratio, w);
+
+  // The other sources in a pipeline as in pairwise_in_arena: search (straightening what it
+  // settles), the in-order barrier, then the joins with every earlier source's half.
+  std::vector<Half> halves(k);
+  std::vector<std::unique_ptr<core::GeodesicQuery>> owned;
+  tbb::concurrent_queue<core::GeodesicQuery*> pool;
+  std::mutex m;
+  struct Item {
+    std::size_t at = 0;  // in `order`
+    core::GeodesicQuery* query = nullptr;
+  };
+  // note: by radius, smallest first: a search started after another then mostly ends after
+  // it, so rarely waits at the barrier holding its query; and each pair joins over the shell
+  // of the smaller search.
+  std::vector<std::size_t> order;
+  for (std::size_t i = pilots; i < k; ++i) order.push_back(i);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return radius[a] < radius[b]; });
+  std::size_t next = 0;
+  // The route through shell node t of a's half and the later search q (from i), into route.
+  auto meeting_route = [&](const Half& h, std::size_t t, const core::GeodesicQuery& q,
+                           std::vector<std::uint32_t>& nodes,
+                           std::vector<std::array<double, 2>>& route) {
+    route.clear();
+    h.path_bends(t, nodes);
+    for (std::uint32_t b : nodes) route.push_back({graph.position(b)[0], graph.position(b)[1]});
+    q.path_to_node(h.shell[t].node, nodes);
+    for (std::size_t n = nodes.size(); n-- > 0;) {
+      route.push_back({graph.position(nodes[n])[0], graph.position(nodes[n])[1]});
+    }
+  };
+  // Per join scratch.
+  struct JoinScratch {
+    std::vector<double> sums;
+    std::vector<std::size_t> near, picked;
+    std::vector<std::uint32_t> nodes;
+    std::vector<std::array<double, 2>> route, bends, best_bends;
+  };
+  auto join = [&](std::size_t a, std::size_t i, const core::GeodesicQuery& q, JoinScratch& js) {
+    auto& [sums, near, picked, nodes, route, bends, best_bends] = js;
+    const Half& h = halves[a];
+    sums.resize(h.shell.size());
+    double best = inf;
+    std::size_t at = 0;
+    for (std::size_t t = 0; t < h.shell.size(); ++t) {
+      const double db = q.settled_distance(h.shell[t].node);
+      sums[t] = db < inf ? h.shell[t].d + db : inf;
+      if (sums[t] < best) {
+        best = sums[t];
+        at = t;
+      }
+    }
+    if (!(best <= radius[a] + radius[i] - w)) return;  // not proven: measured one way
+    // More meeting nodes, each the best at least one longest segment away from those taken,
+    // while nearly as short: one per route around the hills between, where the graph's error
+    // may have ranked the longer first.
+    near.clear();
+    for (std::size_t t = 0; t < h.shell.size(); ++t) {
+      if (sums[t] < best * (1 + kNearTie)) near.push_back(t);
+    }
+    picked.assign(1, at);
+    while (picked.size() < kMeetingRoutes) {
+      double next_sum = inf;
+      std::size_t next_at = h.shell.size();
+      for (std::size_t t : near) {
+        if (!(sums[t] < next_sum)) continue;
+        const double* p = graph.position(h.shell[t].node);
+        bool apart = true;
+        for (std::size_t u : picked) {
+          const double* o = graph.position(h.shell[u].node);
+          if ((p[0] - o[0]) * (p[0] - o[0]) + (p[1] - o[1]) * (p[1] - o[1]) <= w * w) apart = false;
+        }
+        if (apart) {
+          next_sum = sums[t];
+          next_at = t;
+        }
+      }
+      if (next_at == h.shell.size()) break;
+      picked.push_back(next_at);
+    }
+    core::PathStraightener& st = straightener();
+    double len_best = inf;
+    for (const std::size_t t : picked) {
+      meeting_route(h, t, q, nodes, route);
+      const double len = st.along(points[a], route, points[i], routes_out ? &bends : nullptr);
+      if (len >= 0 && len < len_best) {
+        len_best = len;
+        if (routes_out) best_bends.swap(bends);
+      }
+    }
+    // note: the met path is a real one (up to the anchors' float rounding); pulled taut along
+    // its route it is never longer. Where it is, the route left the path's faces (its part
+    // told by bends cut across a hole or the outline): the pair is measured one way.
+    if (!(len_best <= best * (1 + 1e-6))) return;
+    const std::size_t ab = std::min(a, i) * k + std::max(a, i);
+    joined_len[ab] = len_best;
+    if (routes_out && len_best < inf)
+      joined_route[ab] = stored_route(points, origin, a, i, best_bends);
+  };
+  // Source order[at]: searched, what it settled straightened, its half kept.
+  auto search = [&](std::size_t at) {
+    const std::size_t i = order[at];
+    core::GeodesicQuery* q = nullptr;
+    if (!pool.try_pop(q)) {
+      auto made = std::make_unique<core::GeodesicQuery>(graph);
+      made->set_anchored(true);
+      // note: waypoints two longest segments apart: the route of a met pair's
+      // earlier half strays from its path by less than a face between them (at
+      // one segment apart, 1.4 x the memory for the same figures within 0.1 %).
+      made->set_track_bends(true, 2 * w);
+      q = made.get();
+      std::lock_guard<std::mutex> lock(m);
+      owned.push_back(std::move(made));
+    }
+    const auto targets = others(i);
+    std::vector<double> d;
+    Shell shell;
+    q->explore(points[i], targets, radius[i], radius[i] - w, shell, d);
+    settled_by[i] = q->settled();
+    straighten_direct(*q, i, targets, d);
+    // note: a later search settles nothing farther (in 3D) than its radius and one
+    // bucket: the shell's nodes beyond every later one's are never joined, nor
+    // those of a later one this search settled (their pair is straightened here).
+    auto reached = [&](std::uint32_t v) {
+      const double* p = graph.position(v);
+      for (std::size_t later = at + 1; later < order.size(); ++later) {
+        if (direct[i * k + order[later]] < inf) continue;
+        const core::SurfacePoint& o = points[order[later]];
+        const double dx = p[0] - o.x, dy = p[1] - o.y, dz = p[2] - o.z;
+        const double r = radius[order[later]] + w;
+        if (dx * dx + dy * dy + dz * dz <= r * r) return true;
+      }
+      return false;
+    };
+    halves[i] = Half(*q, graph.node_count(), shell, reached);
+    if (searched) searched();
+    return Item{at, q};
+  };
+  // Its joins with every earlier source's half, then its query back to the pool.
+  auto joins = [&](Item item) {
+    const std::size_t i = order[item.at];
+    JoinScratch js;
+    for (std::size_t before = 0; before < item.at; ++before) {
+      const std::size_t a = order[before];
+      // note: a pair either search settled is straightened from there.
+      if (direct[a * k + i] < inf || direct[i * k + a] < inf) continue;
+      join(a, i, *item.query, js);
+    }
+    pool.push(item.query);
+  };
+  tbb::parallel_pipeline(
+      tokens, tbb::make_filter<void, std::size_t>(tbb::filter_mode::serial_in_order,
+                                                  [&](tbb::flow_control& fc) -> std::size_t {
+                                                    if (next >= order.size()) fc.stop();
+                                                    return next++;
+                                                  }) &
+                  tbb::make_filter<std::size_t, Item>(tbb::filter_mode::parallel, search) &
+                  tbb::make_filter<Item, Item>(tbb::filter_mode::serial_in_order,
+                                               [](Item item) { return item; }) &
+                  tbb::make_filter<Item, void>(tbb::filter_mode::parallel, joins));
+  owned.clear();
+  halves.clear();
+
+  // Each pair's shortest candidate; those with none are left to one-way queries.
+  std::vector<char> left(k * k, 0);
+  std::size_t left_count = 0;
+  for (std::size_t a = 0; a < k; ++a) {
+    for (std::size_t b = a + 1; b < k; ++b) {
+      const std::size_t ab = a * k + b, ba = b * k + a;
+      double v = inf;
+      const std::vector<std::array<float, 2>>* r = nullptr;
+      auto take = [&](double len, const std::vector<std::array<float, 2>>* route) {
+        if (len < v) {
+          v = len;
+          r = route;
+        }
+      };
+      take(direct_len[ab], routes_out ? &direct_route[ab] : nullptr);
+      take(direct_len[ba], routes_out ? &direct_route[ba] : nullptr);
+      take(joined_len[ab], routes_out ? &joined_route[ab] : nullptr);
+      if (v < inf) {
+        out[ab] = v;
+        if (routes_out) routes_out->xy[ab] = std::move(*r);
+      } else {
+        left[ab] = 1;
+        ++left_count;
+      }
+    }
+  }
+  for (std::size_t n : settled_by) stats.settled += static_cast<double>(n);
+  for (const auto& st : straighteners) {
+    if (!st) continue;
+    stats.straightened += st->stats().paths;
+    stats.straighten_passes += st->stats().passes;
+    stats.reroutes += st->stats().reroutes;
+    stats.straighten_failed += st->stats().failed;
+  }
+  if (left_count > 0) {
+    PairRoutes left_routes;
+    std::vector<double> one_way(k * k, 0.0);
+    measure_one_way(graph, points, left, true, one_way, stats, nullptr,
+                    routes_out ? &left_routes : nullptr);
+    for (std::size_t ab = 0; ab < k * k; ++ab) {
+      if (!left[ab]) continue;
+      out[ab] = one_way[ab];
+      if (routes_out) routes_out->xy[ab] = std::move(left_routes.xy[ab]);
+    }
+  }
+  stats.one_way_pairs += left_count;
+  return out;
+}
+
 // pairwise_distances in the current arena, meeting searches with at most `tokens` queries at
 // once; searched (if given) is called as each source's search is done.
 std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
@@ -313,6 +697,9 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
   std::vector<char> need(k * k, 0);
   for (std::size_t i = 0; i < k; ++i) {
     for (std::size_t j = i + 1; j < k; ++j) need[i * k + j] = 1;
+  }
+  if (options.straighten && method == PairwiseMethod::kMeet && k >= 3) {
+    return meet_straightened(graph, points, options.routes_out, stats, tokens, searched);
   }
   if (options.straighten || method == PairwiseMethod::kOneWay || k < 3) {
     measure_one_way(graph, points, need, options.straighten, out, stats, searched,
@@ -408,11 +795,10 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
 std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
                                        const std::vector<core::SurfacePoint>& points,
                                        const PairwiseOptions& options, PairwiseStats* stats) {
-  const PairwiseMethod method =
-      options.straighten ? PairwiseMethod::kOneWay : options.method;  // paths need one way
+  const PairwiseMethod method = options.method;
   const std::size_t max_searches = options.max_searches;
   const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
-  std::size_t workers = threads, tokens = unbounded_searches(threads);
+  std::size_t workers = threads, tokens = unbounded_searches(threads, options.straighten);
   if (max_searches > 0) {
     if (max_searches < min_searches(method)) {
       throw std::invalid_argument("pairwise_distances: fewer searches than it needs at once");
@@ -538,7 +924,7 @@ void plan_graphs(const core::TriMesh& original, const core::TriMesh& simplified,
     const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
     result.max_searches =
         std::min((options.memory_budget_bytes - result.graphs_bytes) / result.search_bytes,
-                 unbounded_searches(threads));
+                 unbounded_searches(threads, options.straighten));
   }
 }
 
@@ -668,7 +1054,7 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
   EvalResult result;
   result.exact = options.exact;
   // note: straightening needs each pair's path, so it measures one way.
-  const PairwiseMethod method = options.straighten ? PairwiseMethod::kOneWay : options.method;
+  const PairwiseMethod method = options.method;
   const bool given = !options.sample_xy.empty();
   const std::size_t sets =
       given ? options.sample_xy.size() : static_cast<std::size_t>(options.sets);

@@ -20,8 +20,9 @@ enum class PairwiseMethod {
   kOneWay,
   // Meeting in the middle: every source searched once, to a radius fitted so that for each
   // pair the two radii overlap (estimated from two full searches); a pair is the least sum of
-  // both searches' distances over the outer shell of one of them. Pairs the radii turn out too
-  // short for are measured one way. About a third of the graph per query.
+  // both searches' distances over the outer shell of one of them (straightened: the path
+  // through that node, the earlier search's part told by the nodes it bends at). Pairs the
+  // radii turn out too short for are measured one way. About a third of the graph per query.
   kMeet,
 };
 
@@ -40,9 +41,9 @@ struct PairwiseOptions {
   // Each pair searched with straight segments across faces (GeodesicQuery::set_anchored),
   // then its path pulled taut into a locally shortest geodesic (core::PathStraightener):
   // exact but for the rare pair whose search still took the longer of two routes nearly equal
-  // in length. Needs the paths, so the pairs are measured one way (method is not used). false:
-  // the paper's Steiner distances, a few tenths of a percent to several percent long
-  // depending on delta.
+  // in length (so meeting, up to 4 meeting nodes apart are tried for each pair, and one way,
+  // the paths from both ends where both searches reach the other). false: the paper's Steiner
+  // distances, a few tenths of a percent to several percent long depending on delta.
   bool straighten = true;
   // With straighten: each pair's straightened path into routes_out (origin: the first point),
   // for shorten_along on another mesh of the same points.

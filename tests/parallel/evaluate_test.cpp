@@ -171,6 +171,50 @@ TEST_CASE("meeting in the middle gives the distances of one-way queries",
   }
 }
 
+TEST_CASE("straightened, meeting in the middle measures what one-way searches measure",
+          "[parallel][evaluate][geodesic]") {
+  // Hills with a no-data hole, on the grid TIN and on a 20 % TIN, at the default spacing: each
+  // met pair's path runs through the meeting node, the earlier search's half told by its bends
+  // and waypoints; pulled taut, it is the geodesic the one-way search's path gives.
+  const auto g = hills();
+  for (const auto& mesh : {hills_grid_mesh(g), simplified(g, 20.0)}) {
+    const core::SteinerGraph graph(
+        mesh, par::kStraightenedDeltaFactorDem * core::mean_edge_length(hills_grid_mesh(g)));
+    const auto points = core::sample_uniform(mesh, 40, 5);
+    par::PairwiseStats meet_stats, one_way_stats;
+    par::PairwiseOptions meet, one_way;
+    one_way.method = par::PairwiseMethod::kOneWay;
+    par::PairRoutes routes;
+    meet.routes_out = &routes;
+    const auto d = par::pairwise_distances(graph, points, meet, &meet_stats);
+    const auto ref = par::pairwise_distances(graph, points, one_way, &one_way_stats);
+    const std::size_t k = points.size();
+    double sum = 0;
+    std::size_t same = 0;
+    for (std::size_t i = 0; i < k; ++i) {
+      for (std::size_t j = i + 1; j < k; ++j) {
+        CAPTURE(i, j);
+        REQUIRE(std::isfinite(ref[i * k + j]));
+        REQUIRE(std::isfinite(d[i * k + j]));
+        CHECK(d[i * k + j] == Approx(ref[i * k + j]).epsilon(1e-3));
+        sum += d[i * k + j] / ref[i * k + j] - 1;
+        same += std::fabs(d[i * k + j] / ref[i * k + j] - 1) < 1e-9;
+        // Its route, for the other mesh: ends at point j.
+        REQUIRE_FALSE(routes.xy[i * k + j].empty());
+        CHECK(routes.xy[i * k + j].back()[0] == static_cast<float>(points[j].x - routes.origin[0]));
+      }
+    }
+    const double pairs = static_cast<double>(k * (k - 1) / 2);
+    CAPTURE(sum / pairs, same);
+    CHECK(std::fabs(sum / pairs) < 1e-5);
+    CHECK(same > 0.9 * pairs);
+    // The searches met for most pairs. note: on a grid this small the radii cover most of it;
+    // on San Gabriel's T each search settles about 36 % of the graph, one way 72 %.
+    CHECK(meet_stats.one_way_pairs < k * (k - 1) / 4);
+    CHECK(meet_stats.straighten_failed == 0);
+  }
+}
+
 TEST_CASE("a memory budget bounds the searches at once, with the same figures",
           "[parallel][evaluate][memory]") {
   const auto [t, s] = hills_and_20_percent();
@@ -196,6 +240,14 @@ TEST_CASE("a memory budget bounds the searches at once, with the same figures",
       Catch::Matches("the geodesics need about .* \\(a Steiner graph of .*, 2 searches of "
                      ".*\\), more than the .* available \\(--max-memory\\); use a "
                      "larger --delta"));
+  // Straightened, a search holds more than twice the memory: one per thread at most.
+  opt.straighten = true;
+  opt.memory_budget_bytes = 0;
+  const auto straightened = par::evaluate_distances(t, s, opt);
+  opt.memory_budget_bytes = straightened.graphs_bytes + 100 * straightened.search_bytes;
+  const auto plenty = par::evaluate_distances(t, s, opt);
+  CHECK(plenty.max_searches == 2);
+  CHECK(plenty.set_errors == straightened.set_errors);
 }
 
 TEST_CASE("the graph estimate counts the nodes of the graph", "[parallel][evaluate][memory]") {
@@ -232,6 +284,14 @@ TEST_CASE("pairwise distances with a bound on searches give the same distances",
   bounded.method = par::PairwiseMethod::kOneWay;
   const auto one_way = par::pairwise_distances(graph, points, bounded);
   CHECK(one_way.size() == free_run.size());
+  // Straightened meeting too: which searches wait at once changes nothing.
+  par::PairwiseOptions straightened;
+  const auto free_straightened = par::pairwise_distances(graph, points, straightened);
+  for (std::size_t bound : {2, 3, 5}) {
+    CAPTURE(bound);
+    straightened.max_searches = bound;
+    CHECK(par::pairwise_distances(graph, points, straightened) == free_straightened);
+  }
 }
 
 TEST_CASE("progress tells each stage as it starts and the sources searched in geodesic stages",
