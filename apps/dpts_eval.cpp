@@ -120,9 +120,10 @@ cell centre.
   --t-srs CRS        the mesh's CRS when dpts-par was given --t-srs
   --threads N        worker threads (default: all cores)
   --max-memory MB    memory the run may use (default: what is available when the geodesics
-                     start); each search needs 16 bytes per Steiner node, so fewer threads
-                     search at once when all do not fit, and a run that does not fit with one
-                     is refused before the graphs are built
+                     start); each search needs 36 bytes per Steiner node (12 with --steiner),
+                     so fewer threads search at once when all do not fit; where two do not,
+                     the pairs are searched one way (about twice the time); a run that does
+                     not fit with one is refused before the graphs are built
   --json             print one JSON object with all figures as the last line
   --quiet            only the JSON line (or nothing but errors)
   --help, --version

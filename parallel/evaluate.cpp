@@ -889,7 +889,7 @@ Geodesics build_exact(const core::TriMesh& original, const core::TriMesh& simpli
 // note: the graphs are built one after the other, each freed before the next: the peak holds
 // the larger one and its searches.
 void plan_graphs(const core::TriMesh& original, const core::TriMesh& simplified,
-                 const EvalOptions& options, PairwiseMethod method, std::size_t k_max,
+                 const EvalOptions& options, PairwiseMethod& method, std::size_t k_max,
                  EvalResult& result) {
   // note: the paper's Steiner distances need one delta on both meshes (their bias depends on
   // it); straightened ones are exact but for near ties, whose share depends on the spacing
@@ -911,7 +911,17 @@ void plan_graphs(const core::TriMesh& original, const core::TriMesh& simplified,
       std::max(est_t.nodes, est_s.nodes), std::max(original.faces.size(), simplified.faces.size()),
       k_max, options.straighten);
   if (options.memory_budget_bytes > 0) {
-    const std::size_t need = result.graphs_bytes + min_searches(method) * result.search_bytes;
+    // note: straightened pairs can be measured one way, one search at a time: slower (each
+    // search about twice the graph) but within a budget that two searches do not fit.
+    auto need_for = [&](PairwiseMethod m) {
+      return result.graphs_bytes + min_searches(m) * result.search_bytes;
+    };
+    if (options.straighten && method == PairwiseMethod::kMeet &&
+        need_for(PairwiseMethod::kMeet) > options.memory_budget_bytes &&
+        need_for(PairwiseMethod::kOneWay) <= options.memory_budget_bytes) {
+      method = PairwiseMethod::kOneWay;
+    }
+    const std::size_t need = need_for(method);
     if (need > options.memory_budget_bytes) {
       throw InputError(
           "the geodesics need about " + format_bytes(static_cast<double>(need)) +
@@ -1053,8 +1063,8 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
   };
   EvalResult result;
   result.exact = options.exact;
-  // note: straightening needs each pair's path, so it measures one way.
-  const PairwiseMethod method = options.method;
+  // note: one way where a memory budget fits only one search (plan_graphs).
+  PairwiseMethod method = options.method;
   const bool given = !options.sample_xy.empty();
   const std::size_t sets =
       given ? options.sample_xy.size() : static_cast<std::size_t>(options.sets);

@@ -248,6 +248,13 @@ TEST_CASE("a memory budget bounds the searches at once, with the same figures",
   const auto plenty = par::evaluate_distances(t, s, opt);
   CHECK(plenty.max_searches == 2);
   CHECK(plenty.set_errors == straightened.set_errors);
+  CHECK(plenty.original_one_way < 30 * 29 / 4);  // met, but near the hole
+  // Room for one search only: measured one way, one search at a time.
+  opt.memory_budget_bytes = straightened.graphs_bytes + 3 * straightened.search_bytes / 2;
+  const auto one = par::evaluate_distances(t, s, opt);
+  CHECK(one.max_searches == 1);
+  CHECK(one.original_one_way == 30 * 29 / 2);
+  CHECK(one.distance_error == Approx(straightened.distance_error).epsilon(0.05));
 }
 
 TEST_CASE("the graph estimate counts the nodes of the graph", "[parallel][evaluate][memory]") {
