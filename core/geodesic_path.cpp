@@ -434,9 +434,39 @@ double PathStraightener::along(const SurfacePoint& source,
   std::uint32_t f = source.face;
   int entry = -1;
   std::size_t steps = 0;
+  // The face around vertex v whose corner at v holds the direction to q (kNoFace: none, q
+  // beyond the outline there).
+  auto toward = [&](std::uint32_t v, std::array<double, 2> q) {
+    std::uint32_t found = SteinerGraph::kNoFace;
+    const auto o = xy(v);
+    g_.for_each_face_of_vertex(v, [&](std::uint32_t g) {
+      if (found != SteinerGraph::kNoFace) return;
+      const auto& c = m.faces[g];
+      const int i = c[0] == v ? 0 : c[1] == v ? 1 : 2;
+      const auto a = xy(c[(i + 1) % 3]), b = xy(c[(i + 2) % 3]);
+      const double sign = orient(o, a, b) < 0 ? -1.0 : 1.0;
+      if (sign * orient(o, a, q) >= 0 && sign * orient(o, q, b) >= 0) found = g;
+    });
+    return found;
+  };
+  // Where p is a corner of f (a route point on a vertex, or a crossing through one), f becomes
+  // the face around it the segment to q leaves through: the face it came by may lie on another
+  // side (a vertex of the outline, a sharp turn).
+  auto pivot = [&](std::array<double, 2> p, std::array<double, 2> q) {
+    for (std::uint32_t v : m.faces[f]) {
+      if (xy(v) != p) continue;
+      const std::uint32_t g = toward(v, q);
+      if (g == SteinerGraph::kNoFace || g == f) return;
+      // note: the path passes through v (the faces between f and g share only v).
+      if (nodes.empty() || nodes.back() != v) nodes.push_back(v);
+      f = g;
+      return;
+    }
+  };
   auto walk = [&](std::array<double, 2> p, std::array<double, 2> q) {
     // note: a segment may leave back through the edge the last one came in by (a sharp turn).
     entry = -1;
+    pivot(p, q);
     for (;;) {
       const auto& c = m.faces[f];
       const double sign = orient(xy(c[0]), xy(c[1]), xy(c[2])) < 0 ? -1.0 : 1.0;
@@ -458,7 +488,16 @@ double PathStraightener::along(const SurfacePoint& source,
       const auto pick = around_[static_cast<std::size_t>(
           std::lround(std::clamp(t, 0.0, 1.0) * static_cast<double>(around_.size() - 1)))];
       if (nodes.empty() || nodes.back() != pick) nodes.push_back(pick);
-      const std::uint32_t next = g_.across(f, exit);
+      std::uint32_t next = g_.across(f, exit);
+      if (next == SteinerGraph::kNoFace && (ta == 0 || tb == 0)) {
+        // Through a corner on the outline: on from that corner, into the face ahead.
+        const std::uint32_t v = m.faces[f][ta == 0 ? exit : (exit + 1) % 3];
+        next = toward(v, q);
+        if (next == SteinerGraph::kNoFace || next == f) return false;
+        f = next;
+        entry = -1;
+        continue;
+      }
       if (next == SteinerGraph::kNoFace) return false;
       entry = -1;
       for (int i = 0; i < 3; ++i) {
@@ -473,9 +512,17 @@ double PathStraightener::along(const SurfacePoint& source,
     p = q;
   }
   if (!walk(p, {target.x, target.y})) return -1;
-  if (f != target.face) {
-    // The target on an edge (or a corner) of the face the walk ended in: through the node of
-    // their shared edge nearest it.
+  std::uint32_t at_corner = SteinerGraph::kNoFace;
+  for (std::uint32_t v : m.faces[f]) {
+    if (xy(v) == std::array<double, 2>{target.x, target.y}) at_corner = v;
+  }
+  if (f != target.face && at_corner != SteinerGraph::kNoFace) {
+    // The target on a corner of the face the walk ended in (a vertex, which the target's own
+    // face holds too): through that vertex.
+    if (nodes.empty() || nodes.back() != at_corner) nodes.push_back(at_corner);
+  } else if (f != target.face) {
+    // The target on an edge of the face the walk ended in: through the node of their shared
+    // edge nearest it.
     int shared = -1;
     for (int i = 0; i < 3; ++i) {
       if (g_.across(f, i) == target.face) shared = i;

@@ -125,6 +125,38 @@ TEST_CASE("a path along a given route is pulled taut: the segment on a plane",
   }
 }
 
+TEST_CASE("a route through a corner of the outline turns there into the faces ahead",
+          "[core][geodesic][exact]") {
+  // A flat L (a 100 m square less its north-east quarter): from the south-east arm to the
+  // north-west one the shortest path bends at the inner corner (50, -50), on the outline. The
+  // walk along the route reaches that corner in a face of the south-east arm, from which the
+  // segment on leaves through other faces around the corner, not across the outline.
+  auto m = grid_surface(11, 11, 10.0, [](double, double) { return 0.0; });
+  std::vector<std::array<std::uint32_t, 3>> kept;
+  for (const auto& f : m.faces) {
+    double cx = 0, cy = 0;
+    for (auto v : f) {
+      cx += m.xyz[3 * v] / 3;
+      cy += m.xyz[3 * v + 1] / 3;
+    }
+    if (!(cx > 50 && cy > -50)) kept.push_back(f);
+  }
+  m.faces = kept;
+  const core::SteinerGraph g(m, 4.0);
+  core::PathStraightener s(g);
+  const core::PointLocator locate(m);
+  const auto a = locate.locate(80, -70), b = locate.locate(30, -20);
+  REQUIRE(a);
+  REQUIRE(b);
+  const double expected = 2 * std::hypot(30.0, 20.0);
+  const std::vector<std::array<double, 2>> corner{{50, -50}};
+  CHECK(s.along(a->point, corner, b->point) == Approx(expected).epsilon(1e-9));
+  CHECK(s.along(b->point, corner, a->point) == Approx(expected).epsilon(1e-9));
+  // A route cutting across the missing quarter leaves the mesh: no path.
+  const std::vector<std::array<double, 2>> across{{60, -40}};
+  CHECK(s.along(a->point, across, b->point) < 0);
+}
+
 TEST_CASE("straightened paths over a ridge and a valley are straight when unfolded",
           "[core][geodesic][exact]") {
   // z = slope * |x - 150| (a ridge for slope < 0, a valley for slope > 0): unfolded, each side
