@@ -50,6 +50,7 @@ class SteinerGraph {
   const TriMesh& mesh() const { return mesh_; }
   double delta() const { return delta_; }
   std::size_t node_count() const { return nodes_.size(); }
+  std::size_t edge_count() const { return edges_.size(); }
   std::size_t steiner_count() const { return node_count() - mesh_.vertex_count(); }
   const double* position(std::uint32_t node) const { return nodes_[node].data(); }
 
