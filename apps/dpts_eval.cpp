@@ -68,11 +68,11 @@ is the mean over all pairs of |GD_T - GD_T'| / GD_T, where T is the DEM's full-r
 grid TIN and T' the mesh. Geodesics are searched on the paper's Steiner graph (points every
 delta along edges, each triangle's boundary points pairwise connected) with straight segments
 across faces (each label keeps the point its segment starts from and the part of its edge that
-point sees), each pair's two searches meeting in the middle, then each path is unfolded and
-pulled taut into an exact, locally shortest geodesic, and each pair's route on either mesh is
-also pulled taut on the other, the shorter kept: under 0.01 % above exact on average on real
-DEMs at the default delta, and the measure within 1.5 % of the exact one (--steiner keeps the
-paper's Steiner distances, 0.7 % above).
+point sees), each pair's two searches meeting in the middle (one way on a mesh with holes),
+then each path is unfolded and pulled taut into an exact, locally shortest geodesic, and each
+pair's route on either mesh is also pulled taut on the other, the shorter kept: under 0.01 %
+above exact on average on real DEMs at the default delta, and the measure within 1.5 % of the
+exact one (--steiner keeps the paper's Steiner distances, 0.7 % above).
 The result is the mean over independent sets. Also reports the mesh's validity over
 the DEM (orientation, coverage, faces over no-data) and its vertical error at every valid
 cell centre.
