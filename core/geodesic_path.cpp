@@ -514,7 +514,7 @@ double PathStraightener::along(const SurfacePoint& source,
   if (!walk(p, {target.x, target.y})) return -1;
   std::uint32_t at_corner = SteinerGraph::kNoFace;
   for (std::uint32_t v : m.faces[f]) {
-    if (xy(v) == std::array<double, 2>{target.x, target.y}) at_corner = v;
+    if (f != target.face && xy(v) == std::array<double, 2>{target.x, target.y}) at_corner = v;
   }
   if (f != target.face && at_corner != SteinerGraph::kNoFace) {
     // The target on a corner of the face the walk ended in (a vertex, which the target's own

@@ -45,6 +45,54 @@ double straight2(const std::vector<core::SurfacePoint>& points, std::size_t i, s
   return dx * dx + dy * dy + dz * dz;
 }
 
+// A route (points seen from above, from point i to j) as PairRoutes keeps it for the pair
+// min(i, j) < max(i, j): offsets from origin, from the lower to the higher, then that point.
+std::vector<std::array<float, 2>> stored_route(const std::vector<core::SurfacePoint>& points,
+                                               const std::array<double, 2>& origin, std::size_t i,
+                                               std::size_t j,
+                                               const std::vector<std::array<double, 2>>& route) {
+  auto offset = [&](double x, double y) {
+    return std::array<float, 2>{static_cast<float>(x - origin[0]),
+                                static_cast<float>(y - origin[1])};
+  };
+  std::vector<std::array<float, 2>> r;
+  r.reserve(route.size() + 1);
+  for (const auto& p : route) r.push_back(offset(p[0], p[1]));
+  if (i > j) std::reverse(r.begin(), r.end());
+  const core::SurfacePoint& end = points[std::max(i, j)];
+  r.push_back(offset(end.x, end.y));
+  return r;
+}
+
+// Every point but point i, in order.
+std::vector<core::SurfacePoint> others(const std::vector<core::SurfacePoint>& points,
+                                       std::size_t i) {
+  std::vector<core::SurfacePoint> t;
+  for (std::size_t j = 0; j < points.size(); ++j) {
+    if (j != i) t.push_back(points[j]);
+  }
+  return t;
+}
+
+// A pilot's estimate for the meeting radii from its full search (d: its distances to the
+// others, in order): the largest ratio of geodesic to straight-line distance over the farther
+// half of its pairs (1 at least).
+double pilot_ratio(const std::vector<core::SurfacePoint>& points, std::size_t p,
+                   const std::vector<double>& d) {
+  std::vector<std::pair<double, double>> far;  // (straight, geodesic)
+  for (std::size_t j = 0, t = 0; j < points.size(); ++j) {
+    if (j != p) far.emplace_back(std::sqrt(straight2(points, p, j)), d[t++]);
+  }
+  std::sort(far.begin(), far.end());
+  double ratio = 1.0;
+  for (std::size_t t = far.size() / 2; t < far.size(); ++t) {
+    if (far[t].first > 0 && std::isfinite(far[t].second)) {
+      ratio = std::max(ratio, far[t].second / far[t].first);
+    }
+  }
+  return ratio;
+}
+
 // The needed pairs i < j (need[i * K + j]) shared out to the sources: each to the endpoint that
 // ranks the other nearer (straight-line distance; ties to i), so that every search stops at
 // about its nearest half of the points.
@@ -110,22 +158,6 @@ void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::Su
   // Per source: the same sums for any thread count.
   std::vector<std::size_t> settled_by(k, 0);
   std::vector<core::PathStraightener::Stats> straightened_by(k);
-  // The route from point i to j (PathStraightener::shortest), from min(i, j), into r; it ends
-  // at point max(i, j), so that a straight one is not empty (empty: none).
-  auto store_route = [&](std::size_t i, std::size_t j,
-                         const std::vector<std::array<double, 2>>& route,
-                         std::vector<std::array<float, 2>>& r) {
-    const auto& origin = routes_out->origin;
-    auto offset = [&](double x, double y) {
-      return std::array<float, 2>{static_cast<float>(x - origin[0]),
-                                  static_cast<float>(y - origin[1])};
-    };
-    r.clear();
-    for (const auto& p : route) r.push_back(offset(p[0], p[1]));
-    if (i > j) std::reverse(r.begin(), r.end());
-    const core::SurfacePoint& end = points[std::max(i, j)];
-    r.push_back(offset(end.x, end.y));
-  };
   struct Scratch {
     core::GeodesicQuery query;
     core::PathStraightener straightener;
@@ -164,9 +196,9 @@ void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::Su
               d[t] = sc->straightener.shortest(sc->query, points[i], t, targets[t], d[t],
                                                routes_out ? &best : nullptr);
               if (routes_out && std::isfinite(d[t])) {
-                store_route(i, j, best,
-                            t < own ? routes_out->xy[std::min(i, j) * k + std::max(i, j)]
-                                    : reverse_routes[i * k + j]);
+                (t < own ? routes_out->xy[std::min(i, j) * k + std::max(i, j)]
+                         : reverse_routes[i * k + j]) =
+                    stored_route(points, routes_out->origin, i, j, best);
               }
             }
             if (t < own) {
@@ -240,32 +272,19 @@ double search_pilots(const core::SteinerGraph& graph, const std::vector<core::Su
                      std::size_t pilots, std::vector<double>& direct,
                      std::vector<std::size_t>& settled_by, const std::function<void()>& searched) {
   const std::size_t k = points.size();
-  std::vector<double> pilot_ratio(pilots, 1.0);
+  std::vector<double> ratios(pilots, 1.0);
   tbb::parallel_for(std::size_t{0}, pilots, [&](std::size_t p) {
     core::GeodesicQuery q(graph);
-    std::vector<core::SurfacePoint> targets;
-    for (std::size_t j = 0; j < k; ++j) {
-      if (j != p) targets.push_back(points[j]);
-    }
     std::vector<double> d;
-    q.distances(points[p], targets, d);
+    q.distances(points[p], others(points, p), d);
     settled_by[p] = q.settled();
-    std::vector<std::pair<double, double>> far;  // (straight, geodesic)
     for (std::size_t j = 0, t = 0; j < k; ++j) {
-      if (j == p) continue;
-      direct[p * k + j] = d[t];
-      far.emplace_back(std::sqrt(straight2(points, p, j)), d[t]);
-      ++t;
+      if (j != p) direct[p * k + j] = d[t++];
     }
-    std::sort(far.begin(), far.end());
-    for (std::size_t t = far.size() / 2; t < far.size(); ++t) {
-      if (far[t].first > 0 && std::isfinite(far[t].second)) {
-        pilot_ratio[p] = std::max(pilot_ratio[p], far[t].second / far[t].first);
-      }
-    }
+    ratios[p] = pilot_ratio(points, p, d);
     if (searched) searched();
   });
-  return *std::max_element(pilot_ratio.begin(), pilot_ratio.end());
+  return *std::max_element(ratios.begin(), ratios.end());
 }
 
 // The radius each non-pilot point is searched to (meeting_radii), from the pilots' ratio of
@@ -371,25 +390,6 @@ struct Half {
   }
 };
 
-// A route (points seen from above, from point i to j) as PairRoutes keeps it for the pair
-// min(i, j) < max(i, j): offsets from origin, from the lower to the higher, then that point.
-std::vector<std::array<float, 2>> stored_route(const std::vector<core::SurfacePoint>& points,
-                                               const std::array<double, 2>& origin, std::size_t i,
-                                               std::size_t j,
-                                               const std::vector<std::array<double, 2>>& route) {
-  auto offset = [&](double x, double y) {
-    return std::array<float, 2>{static_cast<float>(x - origin[0]),
-                                static_cast<float>(y - origin[1])};
-  };
-  std::vector<std::array<float, 2>> r;
-  r.reserve(route.size() + 1);
-  for (const auto& p : route) r.push_back(offset(p[0], p[1]));
-  if (i > j) std::reverse(r.begin(), r.end());
-  const core::SurfacePoint& end = points[std::max(i, j)];
-  r.push_back(offset(end.x, end.y));
-  return r;
-}
-
 // Straightened pairs meeting in the middle (PairwiseMethod::kMeet with straighten): the same
 // radii as pairwise_in_arena's, with anchored searches. A pair one search settles is
 // straightened on its labels (PathStraightener::shortest; both ways where both do). A pair
@@ -421,13 +421,6 @@ std::vector<double> meet_straightened(const core::SteinerGraph& graph,
     if (!st) st = std::make_unique<core::PathStraightener>(graph);
     return *st;
   };
-  auto others = [&](std::size_t i) {
-    std::vector<core::SurfacePoint> t;
-    for (std::size_t j = 0; j < k; ++j) {
-      if (j != i) t.push_back(points[j]);
-    }
-    return t;
-  };
   // Source i's search done (distances d to the others): the targets it settled, straightened.
   auto straighten_direct = [&](const core::GeodesicQuery& q, std::size_t i,
                                const std::vector<core::SurfacePoint>& targets,
@@ -449,28 +442,19 @@ std::vector<double> meet_straightened(const core::SteinerGraph& graph,
   // The pilots: searched in full, their distances estimate the radii.
   constexpr std::size_t kPilots = 2;
   const std::size_t pilots = std::min(kPilots, k);
-  std::vector<double> pilot_ratio(pilots, 1.0);
+  std::vector<double> ratios(pilots, 1.0);
   tbb::parallel_for(std::size_t{0}, pilots, [&](std::size_t p) {
     core::GeodesicQuery q(graph);
     q.set_anchored(true);
-    const auto targets = others(p);
+    const auto targets = others(points, p);
     std::vector<double> d;
     q.distances(points[p], targets, d);
     settled_by[p] = q.settled();
     straighten_direct(q, p, targets, d);
-    std::vector<std::pair<double, double>> far;  // (straight, geodesic)
-    for (std::size_t j = 0, t = 0; j < k; ++j) {
-      if (j != p) far.emplace_back(std::sqrt(straight2(points, p, j)), d[t++]);
-    }
-    std::sort(far.begin(), far.end());
-    for (std::size_t t = far.size() / 2; t < far.size(); ++t) {
-      if (far[t].first > 0 && std::isfinite(far[t].second)) {
-        pilot_ratio[p] = std::max(pilot_ratio[p], far[t].second / far[t].first);
-      }
-    }
+    ratios[p] = pilot_ratio(points, p, d);
     if (searched) searched();
   });
-  const double ratio = *std::max_element(pilot_ratio.begin(), pilot_ratio.end());
+  const double ratio = *std::max_element(ratios.begin(), ratios.end());
   const double w = graph.max_segment();
   const std::vector<double> radius = search_radii(points, pilots, ratio, w);
 
@@ -587,7 +571,7 @@ std::vector<double> meet_straightened(const core::SteinerGraph& graph,
       std::lock_guard<std::mutex> lock(m);
       owned.push_back(std::move(made));
     }
-    const auto targets = others(i);
+    const auto targets = others(points, i);
     std::vector<double> d;
     Shell shell;
     q->explore(points[i], targets, radius[i], radius[i] - w, shell, d);
@@ -708,13 +692,6 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
     return out;
   }
   const double inf = std::numeric_limits<double>::infinity();
-  auto others = [&](std::size_t i) {
-    std::vector<core::SurfacePoint> t;
-    for (std::size_t j = 0; j < k; ++j) {
-      if (j != i) t.push_back(points[j]);
-    }
-    return t;
-  };
   // direct[i * k + j]: GD(i, j) as settled by the search from i (infinity if it was not).
   std::vector<double> direct(k * k, inf);
   std::vector<std::size_t> settled_by(k, 0);
@@ -760,7 +737,8 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
                           owned.push_back(std::move(made));
                         }
                         std::vector<double> d;
-                        q->explore(points[i], others(i), radius[i], radius[i] - w, shells[i], d);
+                        q->explore(points[i], others(points, i), radius[i], radius[i] - w,
+                                   shells[i], d);
                         settled_by[i] = q->settled();
                         for (std::size_t j = 0, t = 0; j < k; ++j) {
                           if (j != i) direct[i * k + j] = d[t++];
