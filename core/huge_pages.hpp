@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <cstdlib>
 #include <new>
 #include <vector>
@@ -30,22 +31,45 @@ struct HugePageAllocator {
   T* allocate(std::size_t n) {
     if (n > static_cast<std::size_t>(-1) / sizeof(T)) throw std::bad_alloc();
     const std::size_t bytes = n * sizeof(T);
-    void* p = nullptr;
-    if (bytes >= kHugePage) {
-      const std::size_t rounded = (bytes + kHugePage - 1) / kHugePage * kHugePage;
-      p = std::aligned_alloc(kHugePage, rounded);
 #ifdef __linux__
-      if (p) madvise(p, rounded, MADV_HUGEPAGE);  // advice only: a refusal changes nothing
-#endif
-    } else {
-      constexpr std::size_t align =
-          alignof(T) > alignof(std::max_align_t) ? alignof(T) : alignof(std::max_align_t);
-      p = std::aligned_alloc(align, (bytes + align) / align * align);
+    if (bytes >= kHugePage) {
+      // note: mapped here, not by malloc: glibc raises its mmap threshold to the size of each
+      // mapped block freed (up to 32 MiB), after which arrays of that size come from the
+      // threads' arenas and stay there once freed. Each search's labels then took a new place,
+      // and the peak grew with every set measured. A mapping goes back to the kernel on free.
+      const std::size_t rounded = round_up(bytes);
+      void* raw = mmap(nullptr, rounded + kHugePage, PROT_READ | PROT_WRITE,
+                       MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+      if (raw == MAP_FAILED) throw std::bad_alloc();
+      // the huge page boundary within the mapping; the rest unmapped
+      const auto at = reinterpret_cast<std::uintptr_t>(raw);
+      const std::uintptr_t aligned = (at + kHugePage - 1) / kHugePage * kHugePage;
+      if (aligned > at) munmap(raw, aligned - at);
+      if (aligned + rounded < at + rounded + kHugePage) {
+        munmap(reinterpret_cast<void*>(aligned + rounded), at + kHugePage - aligned);
+      }
+      madvise(reinterpret_cast<void*>(aligned), rounded, MADV_HUGEPAGE);  // advice only
+      return reinterpret_cast<T*>(aligned);
     }
+#endif
+    constexpr std::size_t align =
+        alignof(T) > alignof(std::max_align_t) ? alignof(T) : alignof(std::max_align_t);
+    void* p = std::aligned_alloc(align, (bytes + align) / align * align);
     if (!p) throw std::bad_alloc();
     return static_cast<T*>(p);
   }
-  void deallocate(T* p, std::size_t) { std::free(p); }
+  void deallocate(T* p, std::size_t n) {
+#ifdef __linux__
+    if (n * sizeof(T) >= kHugePage) {
+      munmap(p, round_up(n * sizeof(T)));
+      return;
+    }
+#endif
+    std::free(p);
+  }
+  static std::size_t round_up(std::size_t bytes) {
+    return (bytes + kHugePage - 1) / kHugePage * kHugePage;
+  }
 
   template <typename U>
   bool operator==(const HugePageAllocator<U>&) const {
