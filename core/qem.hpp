@@ -57,6 +57,12 @@ struct QemOptions {
   // position (a collapse's optimum) there; false if it cannot (the collapse is refused).
   std::vector<double> plane_xy;
   std::function<bool(const double* xyz, double* xy)> to_plane;
+  // Runs fn(begin, end) over parts of [0, n), in any order, maybe on several threads at once:
+  // the first costs of every edge (the piece engine's merge, one large mesh), which read the
+  // mesh only. The callbacks above must then be safe to call from several threads. Null: in
+  // order, on the calling thread. The result does not depend on it.
+  std::function<void(std::size_t n, const std::function<void(std::size_t, std::size_t)>& fn)>
+      for_ranges;
 };
 
 struct QemResult {

@@ -132,3 +132,28 @@ TEST_CASE("qem's quadrics are the sum of its faces' and its outline edges'", "[c
   const double west[3] = {-1, 0, 5};
   CHECK(r.quadrics[0](west) == Approx(1.0));
 }
+
+TEST_CASE("qem's first costs spread over parts give the same mesh as in order", "[core][qem]") {
+  const core::TriMesh in = test::hills_mesh();
+  const std::size_t keep = in.vertex_count() / 10;
+  const core::QemResult plain = core::qem_simplify(in, keep);
+  // Parts of 7 half-edges, last part first: the order a pool of threads might take them in.
+  core::QemOptions options;
+  std::size_t parts = 0, covered = 0;
+  options.for_ranges = [&](std::size_t n, const std::function<void(std::size_t, std::size_t)>& fn) {
+    const std::size_t count = (n + 6) / 7;
+    for (std::size_t i = count; i-- > 0;) {
+      const std::size_t end = std::min(n, 7 * i + 7);
+      fn(7 * i, end);
+      covered += end - 7 * i;
+      ++parts;
+    }
+    CHECK(covered == n);
+  };
+  const core::QemResult spread = core::qem_simplify(in, keep, options);
+  CHECK(parts > 1);
+  CHECK(spread.mesh.xyz == plain.mesh.xyz);
+  CHECK(spread.mesh.faces == plain.mesh.faces);
+  CHECK(spread.source == plain.source);
+  CHECK(spread.collapses == plain.collapses);
+}
