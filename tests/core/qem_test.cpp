@@ -157,3 +157,17 @@ TEST_CASE("qem's first costs spread over parts give the same mesh as in order", 
   CHECK(spread.source == plain.source);
   CHECK(spread.collapses == plain.collapses);
 }
+
+TEST_CASE("qem refuses an edge of three faces and faces oriented unlike", "[core][qem]") {
+  core::TriMesh m;
+  // Edge 0-1 with three faces (apexes 2, 3 and 4).
+  m.xyz = {0, 0, 0, 1, 0, 0, 0.5, 1, 0, 0.5, -1, 0, 0.5, 2, 1};
+  m.faces = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
+  CHECK_THROWS_WITH(core::qem_simplify(m, 4), Catch::Contains("more than two faces"));
+  // Edge 0-1 run the same way by both its faces.
+  m.faces = {{0, 1, 2}, {0, 1, 3}};
+  CHECK_THROWS_WITH(core::qem_simplify(m, 3), Catch::Contains("not oriented alike"));
+  // Run opposite ways: accepted.
+  m.faces = {{0, 1, 2}, {1, 0, 3}};
+  CHECK_NOTHROW(core::qem_simplify(m, 4));
+}
