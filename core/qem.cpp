@@ -148,30 +148,29 @@ class Collapser {
 
   void run(std::size_t keep, const Progress& progress, QemResult& r) {
     heap_ = IndexedMinHeap(fv_.size());
-    // note: each edge's first cost on its own (o_.for_ranges may spread them over threads),
-    // then queued in edge order: the same queue however they were computed.
-    std::vector<double> first(fv_.size());
-    std::vector<char> planned(fv_.size(), 0);
-    auto plan_range = [&](std::size_t begin, std::size_t end) {
-      for (auto h = static_cast<std::uint32_t>(begin); h < end; ++h) {
-        if (opp_[h] != kNone && opp_[h] < h) continue;  // one half-edge per edge
-        Plan p;
-        if (plan(h, p)) {
-          first[h] = p.cost;
-          planned[h] = 1;
-        }
-      }
-    };
+    // note: with o_.for_ranges, each edge's first cost on its own, maybe on several threads,
+    // then queued in edge order: the same queue as in order on this thread.
     if (o_.for_ranges) {
-      o_.for_ranges(fv_.size(), plan_range);
+      std::vector<double> first(fv_.size());
+      std::vector<char> planned(fv_.size(), 0);
+      o_.for_ranges(fv_.size(), [&](std::size_t begin, std::size_t end) {
+        for (auto h = static_cast<std::uint32_t>(begin); h < end; ++h) {
+          Plan p;
+          if (first_edge(h) && plan(h, p)) {
+            first[h] = p.cost;
+            planned[h] = 1;
+          }
+        }
+      });
+      for (std::uint32_t h = 0; h < fv_.size(); ++h) {
+        if (planned[h]) heap_.push_unordered(h, first[h]);
+      }
     } else {
-      plan_range(0, fv_.size());
+      for (std::uint32_t h = 0; h < fv_.size(); ++h) {
+        Plan p;
+        if (first_edge(h) && plan(h, p)) heap_.push_unordered(h, p.cost);
+      }
     }
-    for (std::uint32_t h = 0; h < fv_.size(); ++h) {
-      if (planned[h]) heap_.push_unordered(h, first[h]);
-    }
-    first = {};
-    planned = {};
     heap_.heapify();
     const std::size_t start = alive_;
     const double span = start > keep ? static_cast<double>(start - keep) : 1.0;
@@ -525,6 +524,9 @@ class Collapser {
     const double longest2 = std::max({ux * ux + uy * uy, vx * vx + vy * vy, wx * wx + wy * wy});
     return ux * vy - uy * vx <= kMinHeight * std::sqrt(longest2);
   }
+
+  // Whether h is its edge's half-edge of the two (the lower), or its only one.
+  bool first_edge(std::uint32_t h) const { return opp_[h] == kNone || opp_[h] > h; }
 
   std::uint32_t canonical(std::uint32_t h) const {
     const std::uint32_t g = opp_[h];
