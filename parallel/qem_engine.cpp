@@ -732,10 +732,14 @@ void simplify_qem_pieces(const core::RasterSource& dem, const QemEngineOptions& 
                         };
                         outputs[i] = simplify_piece(dem, positions, pieces[i], fraction, options,
                                                     st.pieces[i], piece_progress);
-                        release_free_memory();
                         shared.update(k, 1.0, "simplify");
                       }
                     });
+  // note: once a group, not after each piece: a piece's freed scratch serves the next piece
+  // on its thread, where a trim after each handed it back to the kernel and the next piece
+  // faulted it in again (San Gabriel to 10 %, 64 pieces: 0.25 s of system time, 10 % of the
+  // CPU).
+  release_free_memory();
   shared.check();
 }
 
