@@ -41,13 +41,12 @@ struct HugePageAllocator {
       void* raw = mmap(nullptr, rounded + kHugePage, PROT_READ | PROT_WRITE,
                        MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
       if (raw == MAP_FAILED) throw std::bad_alloc();
-      // the huge page boundary within the mapping; the rest unmapped
+      // the first huge page boundary within the mapping; the rest (before it, and the
+      // kHugePage - (aligned - at) > 0 bytes after the block) unmapped
       const auto at = reinterpret_cast<std::uintptr_t>(raw);
-      const std::uintptr_t aligned = (at + kHugePage - 1) / kHugePage * kHugePage;
+      const std::uintptr_t aligned = round_up(at);
       if (aligned > at) munmap(raw, aligned - at);
-      if (aligned + rounded < at + rounded + kHugePage) {
-        munmap(reinterpret_cast<void*>(aligned + rounded), at + kHugePage - aligned);
-      }
+      munmap(reinterpret_cast<void*>(aligned + rounded), at + kHugePage - aligned);
       madvise(reinterpret_cast<void*>(aligned), rounded, MADV_HUGEPAGE);  // advice only
       return reinterpret_cast<T*>(aligned);
     }

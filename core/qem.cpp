@@ -150,25 +150,28 @@ class Collapser {
     heap_ = IndexedMinHeap(fv_.size());
     // note: with o_.for_ranges, each edge's first cost on its own, maybe on several threads,
     // then queued in edge order: the same queue as in order on this thread.
+    // Edge h's first cost into cost; false if it has none (not queued).
+    auto first_cost = [&](std::uint32_t h, double& cost) {
+      Plan p;
+      if (!first_edge(h) || !plan(h, p)) return false;
+      cost = p.cost;
+      return true;
+    };
     if (o_.for_ranges) {
       std::vector<double> first(fv_.size());
       std::vector<char> planned(fv_.size(), 0);
       o_.for_ranges(fv_.size(), [&](std::size_t begin, std::size_t end) {
         for (auto h = static_cast<std::uint32_t>(begin); h < end; ++h) {
-          Plan p;
-          if (first_edge(h) && plan(h, p)) {
-            first[h] = p.cost;
-            planned[h] = 1;
-          }
+          planned[h] = first_cost(h, first[h]);
         }
       });
       for (std::uint32_t h = 0; h < fv_.size(); ++h) {
         if (planned[h]) heap_.push_unordered(h, first[h]);
       }
     } else {
+      double cost;
       for (std::uint32_t h = 0; h < fv_.size(); ++h) {
-        Plan p;
-        if (first_edge(h) && plan(h, p)) heap_.push_unordered(h, p.cost);
+        if (first_cost(h, cost)) heap_.push_unordered(h, cost);
       }
     }
     heap_.heapify();
