@@ -50,14 +50,14 @@ void run_qslim(io::DemInfo info, const std::string& input, const SimplifyRequest
   input_ready(r, dem);
   const char* stage = par::name_of(r.algo);
   if (!progress(0.0, stage)) throw Cancelled();
-  const core::TriMesh grid = core::frame_grid_mesh(dem.grid, dem.frame);
+  core::TriMesh grid = core::frame_grid_mesh(dem.grid, dem.frame);
   if (grid.faces.empty()) throw InputError(input + ": " + kNothingToTriangulate);
   if (!progress(0.0, stage)) throw Cancelled();
   out.valid_cells = dem.valid_cells;
   out.input_vertices = grid.vertex_count();
   out.target_vertices = par::target_count(r.keep, out.input_vertices);
   core::QslimStats stats;
-  out.mesh = core::qslim(grid, out.target_vertices, &stats,
+  out.mesh = core::qslim(std::move(grid), out.target_vertices, &stats,
                          [&](double f, std::string_view) { return progress(f, stage); });
   if (!progress(1.0, stage)) throw Cancelled();
   out.kept_vertices = stats.kept_vertices;

@@ -57,7 +57,7 @@ struct Simplification {
   // The piece engines' (qem, vp-meta, pld-meta) stages and pieces; pieces empty otherwise.
   par::MetaStats pieces;
   bool piece_engine = false;
-  std::size_t rejected_folds = 0;  // qslim: collapses refused (fold or border)
+  std::size_t rejected_folds = 0;  // qslim: collapses refused (fold or link condition)
   std::string absurd_note;         // implausible heights read as no-data, or empty
 };
 

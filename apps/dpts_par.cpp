@@ -191,7 +191,7 @@ void after_simplify(const dpts::cli::ParOptions& o, const dpts::api::Simplificat
   if (!r.absurd_note.empty()) std::cerr << DPTS_PROG ": " << r.absurd_note << "\n";
   if (o.verbose && r.piece_engine) print_pieces(r.pieces, dpts::par::is_meta(o.algo));
   if (o.verbose && o.algo == dpts::par::Algorithm::qslim) {
-    std::fprintf(stderr, DPTS_PROG ": %s: %zu collapses refused (fold or border)\n",
+    std::fprintf(stderr, DPTS_PROG ": %s: %zu collapses refused (fold or link condition)\n",
                  o.algo_text.c_str(), r.rejected_folds);
   }
   if (!o.max_error) {

@@ -3,10 +3,12 @@
 # each mode and keep, simplifies with dpts-par and measures with dpts-eval (its default, near
 # exact measure, or the options given, e.g. --exact), printing CSV:
 # dem,mode,keep,vertices,distance_error,rmse_m,max_m,coverage
+# DPTS_BUILD: another build folder (default build/).
 # Usage: bench/mode_table.sh DEM [dpts-eval options; default --points 60 --sets 3]
 #   MODES="qslim qem" KEEPS="10 30 50 70" bench/mode_table.sh ../shared/data/st_helens_crater.tif
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+build=${DPTS_BUILD:-$root/build}
 dem=${1:?usage: mode_table.sh DEM [dpts-eval options]}
 shift
 [ $# -gt 0 ] || set -- --points 60 --sets 3
@@ -16,8 +18,8 @@ name=$(basename "$dem")
 echo "dem,mode,keep,vertices,distance_error,rmse_m,max_m,coverage"
 for mode in ${MODES:-vp vp-meta qslim qem}; do
   for keep in ${KEEPS:-10 30 50 70}; do
-    "$root/build/dpts-par" --quiet --algo "$mode" --keep "$keep%" "$dem" "$tmp/s.ply"
-    "$root/build/dpts-eval" --quiet --json "$@" --dem "$dem" --mesh "$tmp/s.ply" > "$tmp/e.json"
+    "$build/dpts-par" --quiet --algo "$mode" --keep "$keep%" "$dem" "$tmp/s.ply"
+    "$build/dpts-eval" --quiet --json "$@" --dem "$dem" --mesh "$tmp/s.ply" > "$tmp/e.json"
     python3 - "$tmp/e.json" "$name" "$mode" "$keep" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))

@@ -33,6 +33,12 @@ Quadric Quadric::plane(const double n[3], double d) {
   return q;
 }
 
+Quadric& Quadric::operator*=(double w) {
+  a00 *= w, a01 *= w, a02 *= w, a11 *= w, a12 *= w, a22 *= w;
+  b0 *= w, b1 *= w, b2 *= w, c *= w;
+  return *this;
+}
+
 Quadric& Quadric::operator+=(const Quadric& q) {
   a00 += q.a00, a01 += q.a01, a02 += q.a02, a11 += q.a11, a12 += q.a12, a22 += q.a22;
   b0 += q.b0, b1 += q.b1, b2 += q.b2, c += q.c;
@@ -140,6 +146,12 @@ class Collapser {
     area_.resize(f);
     for (std::uint32_t i = 0; i < f; ++i) area_[i] = face_area(i);
     init_quadrics();
+    // note: after the quadrics, which give no outline quadric between two locked vertices.
+    if (o_.lock_outline) {
+      for (std::uint32_t h = 0; h < fv_.size(); ++h) {
+        if (opp_[h] == kNone) flags_[fv_[h]] |= kLocked, flags_[dst(h)] |= kLocked;
+      }
+    }
     alive_ = 0;
     for (std::size_t v = 0; v < n; ++v) alive_ += (flags_[v] & kGone) ? 0 : 1;
   }
@@ -312,7 +324,8 @@ class Collapser {
       return;
     }
     // Triangle quadrics (the squared distance to each whole triangle's plane, weighted by its
-    // size) and the outline's quadrics at weight 1: the outline cannot move anyway. On
+    // size; plane quadrics with o_.plane_quadrics) and the outline's quadrics at weight 1 (by
+    // default: o_.outline_weight): the outline cannot move anyway. On
     // st_helens_crater, 60 points x 3 sets, error x1e-4 at 10/30/50/70 %: plane quadrics,
     // outline weight 100: 18.5/5.68/2.72/1.21; triangle, 100: 18.3/5.75/2.56/1.09; triangle, 1:
     // 17.5/5.74/2.57/1.08 (probabilistic triangle quadrics: 66.8 at 10 %).
@@ -323,8 +336,12 @@ class Collapser {
       const double* c = pos(fv_[3 * f + 2]);
       const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
       const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-      const double nrm[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
-                             u[0] * v[1] - u[1] * v[0]};
+      double nrm[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+                       u[0] * v[1] - u[1] * v[0]};
+      if (o_.plane_quadrics) {
+        const double len = std::sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+        if (len > 0) nrm[0] /= len, nrm[1] /= len, nrm[2] /= len;
+      }
       const Quadric tq = Quadric::plane(nrm, -(nrm[0] * a[0] + nrm[1] * a[1] + nrm[2] * a[2]));
       for (int k = 0; k < 3; ++k) {
         const std::uint32_t h = 3 * f + k;
@@ -338,7 +355,8 @@ class Collapser {
                        e[0] * nrm[1] - e[1] * nrm[0]};
         const double len = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
         if (len > 0) m[0] /= len, m[1] /= len, m[2] /= len;
-        const Quadric eq = Quadric::plane(m, -(m[0] * t[0] + m[1] * t[1] + m[2] * t[2]));
+        Quadric eq = Quadric::plane(m, -(m[0] * t[0] + m[1] * t[1] + m[2] * t[2]));
+        if (o_.outline_weight != 1.0) eq *= o_.outline_weight;
         q_[src(h)] += eq;
         q_[dst(h)] += eq;
       }
@@ -397,7 +415,7 @@ class Collapser {
   // Quadric cost plus the area term for moving both ends of h to x (area false: the quadric's
   // cost alone).
   double cost(std::uint32_t h, const Quadric& q, const double* x, bool area = true) const {
-    if (!area) return q(x);
+    if (!area || o_.area_weight == 0) return q(x);
     const std::uint32_t a = src(h), b = dst(h);
     const std::uint32_t fl = h / 3, fr = opp_[h] == kNone ? kNone : opp_[h] / 3;
     double before = area_[fl] + (fr != kNone ? area_[fr] : 0.0), after = 0;

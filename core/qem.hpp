@@ -26,13 +26,25 @@ struct Quadric {
   // The squared distance to the plane n.x + d = 0, times |n|^2.
   static Quadric plane(const double n[3], double d);
   Quadric& operator+=(const Quadric& q);
+  Quadric& operator*=(double w);
   double operator()(const double x[3]) const;
 };
 
 struct QemOptions {
   // Weight of the squared change of the collapse's star 3D surface area, added to the quadric
-  // cost: a collapse that flattens or roughens the surface costs more.
+  // cost: a collapse that flattens or roughens the surface costs more. 0: the quadric's cost
+  // alone (Garland and Heckbert's).
   double area_weight = 100.0;
+  // The starting quadrics (when `quadrics` is empty): each face's plane at unit weight
+  // (Garland and Heckbert's plane quadrics, as CGAL's GarlandHeckbert_plane_policies), instead
+  // of weighted by the triangle's squared doubled area.
+  bool plane_quadrics = false;
+  // Weight of an outline edge's quadric (the plane through it perpendicular to its face; CGAL's
+  // discontinuity multiplier).
+  double outline_weight = 1.0;
+  // Every outline vertex locked (after the starting quadrics are made): the outline never
+  // changes, and an edge between two outline vertices is never collapsed.
+  bool lock_outline = false;
   // Per vertex: locked vertices never go and never move (a neighbour may collapse onto one).
   // Border edges between two locked vertices get no outline quadric (they are seams, not
   // outline). Empty: none.

@@ -1,6 +1,7 @@
-// The paper's reference competitor, QSlim (Garland and Heckbert's quadric edge collapse), via
-// CGAL's Surface_mesh_simplification with the Garland-Heckbert plane policies, adapted so that
-// it can be compared with the elimination methods on a DEM:
+// The paper's reference competitor, QSlim (Garland and Heckbert's quadric edge collapse, plane
+// quadrics), on dpts's collapse kernel (core/qem.hpp; until issue 20 through CGAL's
+// Surface_mesh_simplification with the Garland-Heckbert plane policies, whose rules it keeps),
+// adapted so that it can be compared with the elimination methods on a DEM:
 //   - the outline of the valid footprint (the mesh border, voids included) is locked: border
 //     edges are never collapsed and a collapse never moves a border vertex, so the footprint
 //     does not shrink;
@@ -19,12 +20,14 @@
 namespace dpts::core {
 
 // Bytes a QSlim run holds per raster cell (grid, surface mesh with quadrics and the collapse
-// queue), measured on real DEMs with some margin (README, memory).
-inline constexpr std::size_t kQslimBytesPerCell = 560;
+// queue), measured with some margin: 434 on San Gabriel, 370 on pyrenees_srtm3 (505 through
+// CGAL's kernel, before issue 20).
+inline constexpr std::size_t kQslimBytesPerCell = 480;
 
 struct QslimStats {
   std::size_t input_vertices = 0, kept_vertices = 0;
-  std::size_t rejected_folds = 0;  // collapses refused because a triangle would fold
+  // collapses refused at the top of the queue: a triangle would fold, or the topology
+  std::size_t rejected_folds = 0;
 };
 
 // Simplifies a triangle mesh (counter-clockwise faces seen from above, in metres) to `keep`
@@ -32,7 +35,8 @@ struct QslimStats {
 // progress (stage "simplify") is asked every few thousand cost computations and collapses,
 // from the first (the queue's costs take seconds on large meshes); false stops it with
 // Cancelled.
-TriMesh qslim(const TriMesh& mesh, std::size_t keep, QslimStats* stats = nullptr,
+// The mesh is taken by value: move it in to save its memory while it runs.
+TriMesh qslim(TriMesh mesh, std::size_t keep, QslimStats* stats = nullptr,
               const Progress& progress = nullptr);
 
 }  // namespace dpts::core

@@ -38,3 +38,29 @@ TEST_CASE("QSlim cannot go below the locked outline", "[core][qslim]") {
   CHECK(out.vertex_count() < outline + outline / 2);
   CHECK(stats.rejected_folds > 0);
 }
+
+TEST_CASE("QSlim's plane quadrics reproduce a roof exactly", "[core][qslim]") {
+  // Two planes meeting along a ridge (y = 12): every collapse within one plane, or along the
+  // ridge, costs nothing, so down to a few interior vertices the surface is unchanged.
+  const int w = 30, h = 25;
+  const auto g = test::make_grid(w, h, [](int c, int r) {
+    return 5.0 + 0.3 * c + (r <= 12 ? 0.8 * r : 0.8 * 12 - 0.5 * (r - 12));
+  });
+  const core::Tin tin = core::grid_tin(g);
+  core::TriMesh in;
+  for (std::uint32_t cell : tin.cells) {
+    in.xyz.insert(in.xyz.end(),
+                  {static_cast<double>(cell % w), static_cast<double>(cell / w), g.z[cell]});
+  }
+  in.faces = tin.faces;
+  core::fix_orientation(in);
+  const std::size_t outline = test::border_points(in).size();
+  const core::TriMesh out = core::qslim(in, outline + 4);
+  CHECK(out.vertex_count() == outline + 4);
+  const core::PointLocator locate(out);
+  for (std::size_t v = 0; v < in.vertex_count(); ++v) {
+    const auto hit = locate.locate(in.xyz[3 * v], in.xyz[3 * v + 1]);
+    REQUIRE(hit);
+    CHECK(hit->point.z == Approx(in.xyz[3 * v + 2]).margin(1e-9));
+  }
+}
