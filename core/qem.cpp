@@ -142,6 +142,7 @@ class Collapser {
     for (std::size_t v = 0; v < n; ++v) {
       if (out_[v] == kNone) flags_[v] |= kGone;  // not a corner of any face
       if (!o_.locked.empty() && o_.locked[v]) flags_[v] |= kLocked;
+      if (out_[v] != kNone && opp_[out_[v]] == kNone) flags_[v] |= kBorder;
     }
     area_.resize(f);
     for (std::uint32_t i = 0; i < f; ++i) area_[i] = face_area(i);
@@ -249,7 +250,9 @@ class Collapser {
   }
 
  private:
-  static constexpr std::uint8_t kGone = 1, kLocked = 2, kPinched = 4;
+  // note: kBorder (on the outline) never changes while a vertex lives: the outline's vertices
+  // stay on it (or go), and no collapse makes an interior vertex an outline one.
+  static constexpr std::uint8_t kGone = 1, kLocked = 2, kPinched = 4, kBorder = 8;
 
   // A collapse: half-edge h (a face's, from a to b) and the vertex that goes; the other one
   // stays, moved to x: vertex `at`'s position, or (kNone) an optimum. xy: x in the second
@@ -275,7 +278,7 @@ class Collapser {
   const double* pos(std::uint32_t v) const { return &xyz_[3 * v]; }
   std::uint32_t src(std::uint32_t h) const { return fv_[h]; }
   std::uint32_t dst(std::uint32_t h) const { return fv_[next_of(h)]; }
-  bool border(std::uint32_t v) const { return opp_[out_[v]] == kNone; }
+  bool border(std::uint32_t v) const { return flags_[v] & kBorder; }
   bool locked(std::uint32_t v) const { return flags_[v] & kLocked; }
   bool pinched(std::uint32_t v) const { return flags_[v] & kPinched; }
 
@@ -503,35 +506,33 @@ class Collapser {
       }
     }
     if (common != (g == kNone ? 1 : 2)) return false;
-    const std::uint32_t fl = h / 3, fr = g == kNone ? kNone : g / 3;
-    bool ok = true;
-    for (const std::uint32_t v : {a, b}) {
-      if (!ok) break;
-      if (p.x[0] == pos(v)[0] && p.x[1] == pos(v)[1] && p.x[2] == pos(v)[2]) continue;
-      around(
-          v,
-          [&](std::uint32_t e) {
-            const std::uint32_t f = e / 3;
-            if (!ok || f == fl || f == fr) return;
-            // Corners counter-clockwise with the moving one in the middle.
-            const double* r = pos(dst(e));
-            const double* s = pos(fv_[prev_of(e)]);
-            if (orient(s, p.x, r) != CGAL::LEFT_TURN || too_thin(s, p.x, r)) {
-              ok = false;
-            } else if (plane_.empty()) {
-              ok = !o_.triangle_ok || o_.triangle_ok(s, p.x, r);
-            } else {
-              const double* ps = &plane_[2 * fv_[prev_of(e)]];
-              const double* pr = &plane_[2 * dst(e)];
-              const double s3[3] = {ps[0], ps[1], s[2]}, x3[3] = {p.xy[0], p.xy[1], p.x[2]},
-                           r3[3] = {pr[0], pr[1], r[2]};
-              ok = orient(s3, x3, r3) == CGAL::LEFT_TURN &&
-                   (!o_.triangle_ok || o_.triangle_ok(s3, x3, r3));
-            }
-          },
-          [](std::uint32_t) {});
-    }
-    return ok;
+    // The faces round a and b but the edge's own, with the moving corner at x: the faces round
+    // v lie between its consecutive neighbours (na, nb are counter-clockwise; a border vertex's
+    // fan is open), and those holding the other end are the edge's own.
+    auto fans_ok = [&](std::uint32_t v, const std::uint32_t* nv, int k, std::uint32_t other) {
+      if (p.x[0] == pos(v)[0] && p.x[1] == pos(v)[1] && p.x[2] == pos(v)[2]) return true;
+      const int faces = border(v) ? k - 1 : k;
+      for (int i = 0; i < faces; ++i) {
+        const std::uint32_t rv = nv[i], sv = nv[i + 1 == k ? 0 : i + 1];
+        if (rv == other || sv == other) continue;
+        // Corners counter-clockwise with the moving one in the middle.
+        const double* r = pos(rv);
+        const double* s = pos(sv);
+        if (orient(s, p.x, r) != CGAL::LEFT_TURN || too_thin(s, p.x, r)) return false;
+        if (plane_.empty()) {
+          if (o_.triangle_ok && !o_.triangle_ok(s, p.x, r)) return false;
+          continue;
+        }
+        const double* ps = &plane_[2 * sv];
+        const double* pr = &plane_[2 * rv];
+        const double s3[3] = {ps[0], ps[1], s[2]}, x3[3] = {p.xy[0], p.xy[1], p.x[2]},
+                     r3[3] = {pr[0], pr[1], r[2]};
+        if (orient(s3, x3, r3) != CGAL::LEFT_TURN) return false;
+        if (o_.triangle_ok && !o_.triangle_ok(s3, x3, r3)) return false;
+      }
+      return true;
+    };
+    return fans_ok(a, na, ka, b) && fans_ok(b, nb, kb, a);
   }
 
   // A new face no thicker than kMinHeight frame units (a cell's side is about one): exact
@@ -632,6 +633,15 @@ class Collapser {
       around(
           stay, [&](std::uint32_t e) { edges_.push_back(canonical(e)); },
           [&](std::uint32_t e) { edges_.push_back(canonical(e)); });
+    }
+    // note: the quadrics (80 bytes, two cache lines) and positions of stay's neighbours are
+    // mostly out of the caches: ask for all of them before the first plan needs one.
+    for (const std::uint32_t e : edges_) {
+      const std::uint32_t v = src(e) == stay ? dst(e) : src(e);
+      const char* q = reinterpret_cast<const char*>(&q_[v]);
+      __builtin_prefetch(q);
+      __builtin_prefetch(q + sizeof(Quadric) - 1);
+      __builtin_prefetch(pos(v));
     }
     for (const std::uint32_t e : edges_) update(e);
   }
