@@ -1,6 +1,7 @@
-// A binary min-heap of item ids keyed by (priority, id), with O(log n) update and erase.
+// A 4-ary min-heap of item ids keyed by (priority, id), with O(log n) update and erase.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -28,7 +29,7 @@ class IndexedMinHeap {
   void assign(const std::vector<std::uint32_t>& ids, const std::vector<double>& keys) {
     heap_.resize(ids.size());
     for (std::size_t i = 0; i < ids.size(); ++i) place(i, {keys[i], ids[i]});
-    for (std::size_t i = heap_.size() / 2; i-- > 0;) sift_down(i);
+    for (std::size_t i = std::min(heap_.size(), heap_.size() / kArity + 1); i-- > 0;) sift_down(i);
   }
 
   // Appends (id, key) without ordering (id must be absent); heapify() then orders all at
@@ -38,7 +39,7 @@ class IndexedMinHeap {
     pos_[id] = static_cast<std::uint32_t>(heap_.size() - 1);
   }
   void heapify() {
-    for (std::size_t i = heap_.size() / 2; i-- > 0;) sift_down(i);
+    for (std::size_t i = std::min(heap_.size(), heap_.size() / kArity + 1); i-- > 0;) sift_down(i);
   }
 
   // Inserts id or changes its key.
@@ -100,10 +101,13 @@ class IndexedMinHeap {
     heap_[i] = e;
     pos_[e.id] = static_cast<std::uint32_t>(i);
   }
+  // note: 4-ary: half the levels of a binary heap, and a node's children share a cache line
+  // or two. Pops come in the same order (keys and ties are totally ordered).
+  static constexpr std::size_t kArity = 4;
   void sift_up(std::size_t i) {
     const Entry e = heap_[i];
     while (i > 0) {
-      const std::size_t parent = (i - 1) / 2;
+      const std::size_t parent = (i - 1) / kArity;
       if (!less(e, heap_[parent])) break;
       place(i, heap_[parent]);
       i = parent;
@@ -114,9 +118,13 @@ class IndexedMinHeap {
     const Entry e = heap_[i];
     const std::size_t n = heap_.size();
     for (;;) {
-      std::size_t child = 2 * i + 1;
-      if (child >= n) break;
-      if (child + 1 < n && less(heap_[child + 1], heap_[child])) ++child;
+      const std::size_t first = kArity * i + 1;
+      if (first >= n) break;
+      std::size_t child = first;
+      const std::size_t end = std::min(first + kArity, n);
+      for (std::size_t c = first + 1; c < end; ++c) {
+        if (less(heap_[c], heap_[child])) child = c;
+      }
       if (!less(heap_[child], e)) break;
       place(i, heap_[child]);
       i = child;
