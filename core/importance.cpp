@@ -68,7 +68,9 @@ struct SmallPoly {
 };
 
 // Clips a convex polygon to the half-plane left of (or on) the directed line a -> b.
-void clip_left(const SmallPoly& in, P2 a, P2 b, SmallPoly& out) {
+// note: inlined into vp_volume_exact's loop (two calls a pair of triangles), where a call
+// copied the polygons through memory.
+[[gnu::always_inline]] inline void clip_left(const SmallPoly& in, P2 a, P2 b, SmallPoly& out) {
   out.n = 0;
   double sp = cross(a, b, in.v[0]);
   for (int i = 0; i < in.n; ++i) {
@@ -117,6 +119,11 @@ double vp_volume_exact(const Star& s, const std::vector<LinkTriangle>& after) {
   };
   SmallPoly poly, tmp;
   double volume = 0.0;
+  // The fan triangles' planes, each made once (on first use) for the stars of at most kCached
+  // link vertices (nearly all), where each was made again for every new triangle it met.
+  constexpr std::size_t kCached = 32;
+  Plane before[kCached];
+  bool made[kCached] = {};
   // Each new triangle is cut by the wedges of the fan (apex, link[i], link[i+1]); inside one
   // piece both surfaces are planes, so their difference is linear and integrates exactly.
   for (const LinkTriangle& t : after) {
@@ -146,7 +153,13 @@ double vp_volume_exact(const Star& s, const std::vector<LinkTriangle>& after) {
       if (tmp.n < 3) continue;
       clip_left(tmp, pb, apex, poly);
       if (poly.n < 3) continue;
-      const Plane before_plane = plane_through(s.apex, a, b);
+      Plane before_plane;
+      if (i >= kCached) {
+        before_plane = plane_through(s.apex, a, b);
+      } else {
+        if (!made[i]) before[i] = plane_through(s.apex, a, b), made[i] = true;
+        before_plane = before[i];
+      }
       auto diff = [&](P2 v) { return before_plane.at(v.x, v.y) - after_plane.at(v.x, v.y); };
       const double d0 = diff(poly.v[0]);
       double d_prev = diff(poly.v[1]);
