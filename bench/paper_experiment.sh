@@ -7,11 +7,13 @@
 # Columns: the paper's five algorithms as the paper defines them (VP with its Monte Carlo
 # volume, 100 samples), then dpts's improvement: VP and VP' with the exact volume integral
 # (dpts-par's default).
+# DPTS_BUILD: another build folder (default build/).
 # Usage: bench/paper_experiment.sh DEM... > results.md   (progress on stderr)
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-par="$root/build/dpts-par"
-eval_="$root/build/dpts-eval"
+build=${DPTS_BUILD:-$root/build}
+par="$build/dpts-par"
+eval_="$build/dpts-eval"
 [[ $# -ge 1 ]] || { echo "usage: paper_experiment.sh DEM..." >&2; exit 2; }
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
