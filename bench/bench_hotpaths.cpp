@@ -9,6 +9,8 @@
 //                            and per_Mcell: seconds per million cells (= us per cell)
 //   BM_qem_simplify          qem's quadric edge collapse of that TIN to 10 %: cells/s and
 //                            per_Mcell (the kernel of dpts-par's default mode, without I/O)
+//   BM_qslim                 QSlim (the same kernel with plane quadrics and the outline
+//                            locked) of that TIN to 10 %: cells/s and per_Mcell
 // (BM_dijkstra_one_source, in bench_geodesic.cpp, is the Steiner-graph Dijkstra per source.)
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
@@ -19,6 +21,7 @@
 #include "bench_support.hpp"
 #include "core/elimination.hpp"
 #include "core/qem.hpp"
+#include "core/qslim.hpp"
 #include "io/dem_reader.hpp"
 #include "parallel/meta.hpp"
 
@@ -112,5 +115,19 @@ void BM_qem_simplify(benchmark::State& state) {
   cell_counters(state, mesh.vertex_count());
 }
 BENCHMARK(BM_qem_simplify)->Unit(benchmark::kMillisecond);
+
+void BM_qslim(benchmark::State& state) {
+  const dpts::io::Dem* dem = load();
+  if (!dem) return state.SkipWithError(("cannot read " + dpts::bench::shared_path(kDem)).c_str());
+  const dpts::core::TriMesh mesh = dem->grid_mesh();
+  for (auto _ : state) {
+    state.PauseTiming();
+    dpts::core::TriMesh copy = mesh;
+    state.ResumeTiming();
+    benchmark::DoNotOptimize(dpts::core::qslim(std::move(copy), mesh.vertex_count() / 10));
+  }
+  cell_counters(state, mesh.vertex_count());
+}
+BENCHMARK(BM_qslim)->Unit(benchmark::kMillisecond);
 
 }  // namespace
