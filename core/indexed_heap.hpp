@@ -29,7 +29,7 @@ class IndexedMinHeap {
   void assign(const std::vector<std::uint32_t>& ids, const std::vector<double>& keys) {
     heap_.resize(ids.size());
     for (std::size_t i = 0; i < ids.size(); ++i) place(i, {keys[i], ids[i]});
-    for (std::size_t i = std::min(heap_.size(), heap_.size() / kArity + 1); i-- > 0;) sift_down(i);
+    heapify();
   }
 
   // Appends (id, key) without ordering (id must be absent); heapify() then orders all at

@@ -45,3 +45,19 @@ TEST_CASE("IndexedMinHeap pops by key, ties by scrambled id, after updates and e
   }
   CHECK(heap.empty());
 }
+
+TEST_CASE("IndexedMinHeap orders any size at once, the smallest included", "[core][heap]") {
+  for (std::uint32_t n = 0; n < 12; ++n) {
+    INFO(n);
+    dpts::core::IndexedMinHeap heap(n);
+    for (std::uint32_t i = 0; i < n; ++i) heap.push_unordered(i, static_cast<double>((7 * i) % n));
+    heap.heapify();
+    std::vector<double> popped;
+    while (!heap.empty()) {
+      popped.push_back(heap.top_key());
+      heap.pop();
+    }
+    CHECK(popped.size() == n);
+    CHECK(std::is_sorted(popped.begin(), popped.end()));
+  }
+}
