@@ -9,12 +9,12 @@
 namespace dpts::core {
 
 TriMesh qslim(TriMesh in, std::size_t keep, QslimStats* stats, const Progress& progress) {
-  // note: the rules of the CGAL Surface_mesh_simplification version this replaced (3.7 x
-  // faster, issue 20): unit-normal plane quadrics, outline edges' quadrics at CGAL's
-  // discontinuity multiplier (100), the quadric's cost alone, its optimum (else the best point
-  // of the edge), border edges constrained and a collapse next to the border onto the border
-  // vertex (Constrained_placement), no fold seen from above. Ties and rounding differ, so the
-  // meshes do too (README, "QSlim").
+  // note: the rules of the CGAL Surface_mesh_simplification version this replaced (which
+  // took 5.6-6.6 x its CPU on San Gabriel, issue 20): unit-normal plane quadrics, outline
+  // edges' quadrics at CGAL's discontinuity multiplier (100), the quadric's cost alone, its
+  // optimum (else the best point of the edge), border edges constrained and a collapse next
+  // to the border onto the border vertex (Constrained_placement), no fold seen from above.
+  // Ties and rounding differ, so the meshes do too (README, "QSlim").
   QemOptions options;
   options.area_weight = 0;
   options.plane_quadrics = true;
