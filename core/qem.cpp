@@ -110,7 +110,11 @@ void optimum(const Quadric& q, const double* p0, const double* p1, double* x) {
 class Collapser {
  public:
   // Takes the mesh's coordinates and the options' quadrics.
-  Collapser(TriMesh&& mesh, QemOptions& options) : o_(options) {
+  // progress is asked (at 0, "simplify") between the steps and every few thousand faces: on
+  // a large mesh (QSlim's, a whole DEM) they take seconds before the first collapse, and a
+  // stop asked for meanwhile must be honoured (Cancelled).
+  Collapser(TriMesh&& mesh, QemOptions& options, const Progress& progress)
+      : o_(options), progress_(progress) {
     const std::size_t n = mesh.vertex_count();
     const std::size_t f = mesh.faces.size();
     if (n >= kNone || 3 * f >= kNone) throw std::invalid_argument("qem: mesh too large");
@@ -127,7 +131,9 @@ class Collapser {
     if (!plane_.empty() && (plane_.size() != 2 * n || !o_.to_plane)) {
       throw std::invalid_argument("qem: plane_xy needs 2 values per vertex and to_plane");
     }
+    check();
     link_opposites();
+    check();
     out_.assign(n, kNone);
     for (std::uint32_t h = 0; h < fv_.size(); ++h) {
       if (out_[fv_[h]] == kNone || opp_[h] == kNone) out_[fv_[h]] = h;
@@ -146,7 +152,9 @@ class Collapser {
     }
     area_.resize(f);
     for (std::uint32_t i = 0; i < f; ++i) area_[i] = face_area(i);
+    check();
     init_quadrics();
+    check();
     // note: after the quadrics, which give no outline quadric between two locked vertices.
     if (o_.lock_outline) {
       for (std::uint32_t h = 0; h < fv_.size(); ++h) {
@@ -185,6 +193,7 @@ class Collapser {
       double cost;
       for (std::uint32_t h = 0; h < fv_.size(); ++h) {
         if (first_cost(h, cost)) heap_.push_unordered(h, cost);
+        if ((h & 0xFFFF) == 0xFFFF) check();
       }
     }
     heap_.heapify();
@@ -334,6 +343,7 @@ class Collapser {
     // 17.5/5.74/2.57/1.08 (probabilistic triangle quadrics: 66.8 at 10 %).
     q_.assign(n, Quadric{});
     for (std::uint32_t f = 0; 3 * f < fv_.size(); ++f) {
+      if ((f & 0xFFFF) == 0xFFFF) check();
       const double* a = pos(fv_[3 * f]);
       const double* b = pos(fv_[3 * f + 1]);
       const double* c = pos(fv_[3 * f + 2]);
@@ -661,7 +671,13 @@ class Collapser {
     }
   }
 
+  // Asks progress whether to go on (Cancelled if not), before the first collapse.
+  void check() const {
+    if (progress_ && !progress_(0.0, "simplify")) throw Cancelled();
+  }
+
   QemOptions& o_;
+  const Progress& progress_;
   std::vector<double> xyz_;
   std::vector<double> plane_;  // per vertex x, y in the second plane (empty: none)
   std::vector<std::uint32_t> fv_, opp_, out_;
@@ -678,7 +694,7 @@ class Collapser {
 QemResult qem_simplify(TriMesh mesh, std::size_t keep, QemOptions options,
                        const Progress& progress) {
   QemResult r;
-  Collapser c(std::move(mesh), options);
+  Collapser c(std::move(mesh), options, progress);
   r.input_vertices = c.alive();
   c.run(keep, progress, r);
   c.result(r);
