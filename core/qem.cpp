@@ -157,8 +157,8 @@ class Collapser {
     check();
     // note: after the quadrics, which give no outline quadric between two locked vertices.
     if (o_.lock_outline) {
-      for (std::uint32_t h = 0; h < fv_.size(); ++h) {
-        if (opp_[h] == kNone) flags_[fv_[h]] |= kLocked, flags_[dst(h)] |= kLocked;
+      for (std::size_t v = 0; v < n; ++v) {
+        if (flags_[v] & kBorder) flags_[v] |= kLocked;
       }
     }
     alive_ = 0;
@@ -167,7 +167,7 @@ class Collapser {
 
   std::size_t alive() const { return alive_; }
 
-  void run(std::size_t keep, const Progress& progress, QemResult& r) {
+  void run(std::size_t keep, QemResult& r) {
     heap_ = IndexedMinHeap(fv_.size());
     // note: with o_.for_ranges, each edge's first cost on its own, maybe on several threads,
     // then queued in edge order: the same queue as in order on this thread.
@@ -221,8 +221,8 @@ class Collapser {
       }
       collapse(p);
       ++r.collapses;
-      if (r.collapses % 4096 == 0 && progress &&
-          !progress(static_cast<double>(r.collapses) / span, "simplify")) {
+      if (r.collapses % 4096 == 0 && progress_ &&
+          !progress_(static_cast<double>(r.collapses) / span, "simplify")) {
         throw Cancelled();
       }
     }
@@ -671,7 +671,8 @@ class Collapser {
     }
   }
 
-  // Asks progress whether to go on (Cancelled if not), before the first collapse.
+  // Asks progress whether to go on (Cancelled if not), before the first collapse (run() asks
+  // it every 4096 collapses, with the fraction done).
   void check() const {
     if (progress_ && !progress_(0.0, "simplify")) throw Cancelled();
   }
@@ -696,7 +697,7 @@ QemResult qem_simplify(TriMesh mesh, std::size_t keep, QemOptions options,
   QemResult r;
   Collapser c(std::move(mesh), options, progress);
   r.input_vertices = c.alive();
-  c.run(keep, progress, r);
+  c.run(keep, r);
   c.result(r);
   if (progress && !progress(1.0, "simplify")) throw Cancelled();
   return r;
