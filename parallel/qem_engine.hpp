@@ -14,19 +14,19 @@
 //     the last collapses follow one cost order, not per-piece budgets.
 // The merge takes the pieces in groups (consecutive in k-d order) whose kept vertices fit the
 // tile budget: a DEM whose kept vertices all fit is one group, merged as above. Otherwise
-// steps 2 and 3 run a group at a time, and the memory the merge holds no longer grows with
-// the DEM (the output mesh going to options.sink): each group's pieces are simplified, stitched to
-// what is still open of the groups before, and collapsed with it down to the target's share of the
-// pieces merged so far (the last group: the target), the vertices a later piece's window
-// shares locked. Then every vertex more than a few edges from those is final: it is
-// written to the output with the faces whose corners are all final, and leaves the merge.
-// The band left open lets the next group simplify the seam between them with the vertices
-// around it; across groups the budget follows the pieces' sizes, within one the cost order.
-// With a vertical bound (--max-error) every new triangle is tested against the valid cell
-// centres it covers: in a piece from its window, in the merge from the DEM read again block
-// by block through a cache of at most one tile.
-// Pieces are simplified independently and merged in k-d order, so the output does not depend
-// on the number of threads.
+// steps 2 and 3 run a group at a time, each group's merge beside the next group's pieces (so
+// that only the last group's merge is serial), and the memory the merge holds no longer grows
+// with the DEM (the output mesh going to options.sink): each group's pieces are simplified,
+// stitched to what is still open of the groups before, and collapsed with it down to the target's
+// share of the pieces merged so far (the last group: the target), the vertices a later piece's
+// window shares locked. Then every vertex more than a few edges from those is final: it is written
+// to the output with the faces whose corners are all final, and leaves the merge. The band left
+// open lets the next group simplify the seam between them with the vertices around it; across
+// groups the budget follows the pieces' sizes, within one the cost order. With a vertical bound
+// (--max-error) every new triangle is tested against the valid cell centres it covers: in a piece
+// from its window, in the merge from the DEM read again block by block through a cache of at most
+// one tile. Pieces are simplified independently and merged in k-d order, so the output does not
+// depend on the number of threads.
 #pragma once
 
 #include <cstddef>
@@ -67,6 +67,9 @@ struct QemEngineOptions {
 // Bytes the qem engine holds per kept vertex in the merge (the pieces' outputs and the merged
 // mesh being collapsed), measured with some margin.
 inline constexpr std::size_t kQemBytesPerKeptVertex = 700;
+// Bytes a piece's output holds per kept vertex until its group's merge (San Gabriel to 10 %:
+// 131), with some margin: the next group's outputs are held beside a group's merge.
+inline constexpr std::size_t kQemBytesPerPieceVertex = 160;
 // Bytes of the output mesh per vertex (its coordinates and about two faces).
 inline constexpr std::size_t kQemBytesPerOutputVertex = 64;
 

@@ -8,8 +8,13 @@
 
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <mutex>
 #include <set>
+#include <string>
+#include <utility>
+#include <vector>
 
+#include "core/errors.hpp"
 #include "core/mesh_check.hpp"
 #include "core/surface_sampling.hpp"
 #include "io/dem_reader.hpp"
@@ -117,6 +122,48 @@ TEST_CASE("qem's piece engine gives the same mesh for 1, 2 and 4 threads",
     const core::TriMesh b = run(threads);
     CHECK(a.xyz == b.xyz);
     CHECK(a.faces == b.faces);
+  }
+}
+
+TEST_CASE("qem's piece engine stops when asked, also during a merge beside the next pieces",
+          "[parallel][qem]") {
+  Fixture fx(false);
+  tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+  // One run reporting: "simplify" while a group's merge runs beside the next group's pieces
+  // (never falling), then "merge", the last group's.
+  std::vector<std::pair<std::string, double>> calls;
+  std::mutex m;
+  const core::Progress record = [&](double f, std::string_view stage) {
+    std::lock_guard<std::mutex> hold(m);
+    calls.emplace_back(std::string(stage), f);
+    return true;
+  };
+  par::MetaStats stats;
+  par::simplify_qem(io::GdalRaster(fx.info), options(600), record, &stats);
+  std::vector<core::Piece> pieces;
+  for (const auto& p : stats.pieces) pieces.push_back(p.piece);
+  REQUIRE(par::qem_groups(pieces, 600.0 / 6000, options(600)).size() > 3);  // several groups
+  bool merging = false;
+  double last = 0;
+  for (const auto& [stage, f] : calls) {
+    if (stage == "merge") merging = true;
+    if (stage == "simplify") {
+      CHECK_FALSE(merging);
+      CHECK(f >= last);
+      last = f;
+    }
+  }
+  CHECK(merging);
+  // Stopped at any call, it stops: the task merging beside the pieces is waited for.
+  const std::size_t n = calls.size();
+  for (const std::size_t stop : {std::size_t{1}, n / 4, n / 2, 3 * n / 4, n - 1}) {
+    INFO("stop at call " << stop << " of " << n);
+    std::size_t seen = 0;
+    const core::Progress ask = [&](double, std::string_view) {
+      std::lock_guard<std::mutex> hold(m);
+      return ++seen < stop;
+    };
+    CHECK_THROWS_AS(par::simplify_qem(io::GdalRaster(fx.info), options(600), ask), Cancelled);
   }
 }
 
