@@ -788,7 +788,8 @@ core::TriMesh simplify_qem(const core::RasterSource& dem, const QemEngineOptions
     });
     st.simplify_s += seconds_since(t0);
     if (first == 0) st.peak_rss_before_merge_kb = peak_rss_kb();
-    // The most the pieces' outputs held at once: one group's.
+    // The most one group's outputs held (the merge beside them took the group before's into
+    // its mesh first).
     std::size_t group_bytes = 0;
     for (std::size_t i = first; i < end; ++i) group_bytes += outputs[i].bytes();
     st.kept_bytes = std::max(st.kept_bytes, group_bytes);
