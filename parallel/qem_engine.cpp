@@ -701,7 +701,8 @@ std::vector<core::Piece> plan_qem(const core::RasterSource& dem, const QemEngine
   const std::vector<core::Piece> pieces =
       divide_dem(dem, options.keep, options.levels, bytes, 1, progress, st, kQemPieceVertices);
   // The merge holds one group's kept vertices (and the open band before it), the next group's
-  // pieces' outputs beside it, and the output unless it goes to a sink.
+  // pieces' outputs beside it (where there is a next group), and the output unless it goes to
+  // a sink.
   const double fraction = std::min(1.0, options.slack * qem_fraction(st));
   const std::vector<std::size_t> groups = qem_groups(pieces, qem_fraction(st), options);
   double group = 0;
@@ -711,9 +712,10 @@ std::vector<core::Piece> plan_qem(const core::RasterSource& dem, const QemEngine
       n += static_cast<double>(pieces[i].vertices);
     group = std::max(group, n * fraction);
   }
+  const std::size_t beside = groups.size() > 2 ? kQemBytesPerPieceVertex : 0;
   check_memory(
       dem, st.target_vertices,
-      static_cast<std::size_t>(group * (kQemBytesPerKeptVertex + kQemBytesPerPieceVertex)) +
+      static_cast<std::size_t>(group * static_cast<double>(kQemBytesPerKeptVertex + beside)) +
           (options.sink ? 0 : st.target_vertices * kQemBytesPerOutputVertex) +
           pieces_in_flight_bytes(pieces, 1, bytes),
       options.memory_limit_bytes);
