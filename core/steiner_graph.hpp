@@ -199,6 +199,7 @@ class SteinerGraph {
   std::uint32_t edge_of(std::uint32_t node) const { return node_edge_[node - nv_]; }
   // note: positions and edges apart, each array dense (24 and 4 bytes a node, where one record
   // took 32): a settled node's edge is read two nodes ahead (GeodesicQuery::prefetch_ahead).
+  // note: edges (and so their Steiner points) in the Z order of their midpoints seen from above.
   HugeVector<std::array<double, 3>> nodes_;  // vertices first, then each edge's Steiner points
   HugeVector<std::uint32_t> node_edge_;      // per Steiner node (node - nv_): its edge
   std::uint32_t nv_ = 0;                     // the mesh's vertices
@@ -465,7 +466,7 @@ class GeodesicQuery {
   // (face, its list's head) for each face with a target, by face: a few entries, where an
   // array over the faces would take 4 bytes a face per search.
   std::vector<std::pair<std::uint32_t, std::int32_t>> face_heads_;
-  std::vector<std::uint64_t> target_faces_;     // bit per face: has a target (fits in cache)
+  std::vector<std::uint64_t> target_faces_;  // bit per face: has a target (fits in cache)
   std::vector<std::int32_t> target_next_;
   std::vector<char> target_done_;  // target settled (its distance final once the search ends)
   std::vector<std::uint32_t> nodes_;
