@@ -37,6 +37,15 @@ using Shell = std::vector<std::pair<std::uint32_t, double>>;
 // for one pair, and how much longer than the best one's their sum may be.
 constexpr std::size_t kMeetingRoutes = 4;
 constexpr double kNearTie = 0.01;
+// The meeting searches' pilots, searched in full: their largest ratio of geodesic to
+// straight-line distance scales the radii. None where the pairs' distances on another surface
+// are given (PairwiseOptions::estimate): the radii then scale those, by kEstimateMargin.
+// note: a fixed count of pilots, not one per thread: the radii, and so the figures, must not
+// depend on the thread count.
+constexpr std::size_t kPilots = 2;
+// note: on San Gabriel's 10 % and 1 % meshes every pair's geodesic on T was within 0.3 % and
+// 1 % of the mesh's; a pair the radii miss is searched one way (slower, as exact).
+constexpr double kEstimateMargin = 1.02;
 
 // Squared straight-line (3D) distance between points i and j.
 double straight2(const std::vector<core::SurfacePoint>& points, std::size_t i, std::size_t j) {
@@ -236,6 +245,19 @@ void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::Su
   }
 }
 
+// The estimate if it gives every pair a < b of k points a positive finite distance, else none
+// (the radii then scale straight-line distances).
+const std::vector<double>* usable_estimate(const std::vector<double>* estimate, std::size_t k) {
+  if (!estimate || estimate->size() != k * k) return nullptr;
+  for (std::size_t a = 0; a < k; ++a) {
+    for (std::size_t b = a + 1; b < k; ++b) {
+      const double e = (*estimate)[a * k + b];
+      if (!(e > 0) || !std::isfinite(e)) return nullptr;
+    }
+  }
+  return estimate;
+}
+
 // Search radii for meeting in the middle: R_i + R_j >= c_ij for every pair, with the sum of
 // squared radii (about the area searched) made small by coordinate descent. Deterministic.
 std::vector<double> meeting_radii(const std::vector<double>& c, std::size_t k) {
@@ -284,18 +306,27 @@ double search_pilots(const core::SteinerGraph& graph, const std::vector<core::Su
     ratios[p] = pilot_ratio(points, p, d);
     if (searched) searched();
   });
-  return *std::max_element(ratios.begin(), ratios.end());
+  return ratios.empty() ? 1.0 : *std::max_element(ratios.begin(), ratios.end());
 }
 
 // The radius each non-pilot point is searched to (meeting_radii), from the pilots' ratio of
-// geodesic to straight-line distance and the longest segment w; the pilots' are unused.
-std::vector<double> search_radii(const std::vector<core::SurfacePoint>& points, std::size_t pilots,
+// geodesic to straight-line distance, or from the pairs' estimated distances where given
+// (usable_estimate: then no pilots), and the longest segment w; the pilots' are unused.
+std::vector<double> search_radii(const std::vector<core::SurfacePoint>& points,
+                                 const std::vector<double>* estimate, std::size_t pilots,
                                  double ratio, double w) {
   const std::size_t k = points.size();
   std::vector<double> c(k * k, 0.0);
   for (std::size_t i = pilots; i < k; ++i) {
     for (std::size_t j = pilots; j < k; ++j) {
-      if (j != i) c[i * k + j] = 1.05 * ratio * std::sqrt(straight2(points, i, j)) + w;
+      if (j == i) continue;
+      const double straight = std::sqrt(straight2(points, i, j));
+      // note: a geodesic is never shorter than the straight line.
+      c[i * k + j] =
+          (estimate ? std::max(kEstimateMargin * (*estimate)[std::min(i, j) * k + std::max(i, j)],
+                               straight)
+                    : 1.05 * ratio * straight) +
+          w;
     }
   }
   return meeting_radii(c, k);
@@ -400,8 +431,9 @@ struct Half {
 // rank the longer first). The shortest is kept. Pairs left are measured one way.
 std::vector<double> meet_straightened(const core::SteinerGraph& graph,
                                       const std::vector<core::SurfacePoint>& points,
-                                      PairRoutes* routes_out, PairwiseStats& stats,
-                                      std::size_t tokens, const std::function<void()>& searched) {
+                                      const std::vector<double>* estimate, PairRoutes* routes_out,
+                                      PairwiseStats& stats, std::size_t tokens,
+                                      const std::function<void()>& searched) {
   const std::size_t k = points.size();
   const double inf = std::numeric_limits<double>::infinity();
   std::vector<double> out(k * k, 0.0);
@@ -439,9 +471,8 @@ std::vector<double> meet_straightened(const core::SteinerGraph& graph,
     }
   };
 
-  // The pilots: searched in full, their distances estimate the radii.
-  constexpr std::size_t kPilots = 2;
-  const std::size_t pilots = std::min(kPilots, k);
+  // The pilots (none with an estimate): searched in full, their distances scale the radii.
+  const std::size_t pilots = estimate ? 0 : std::min(kPilots, k);
   std::vector<double> ratios(pilots, 1.0);
   tbb::parallel_for(std::size_t{0}, pilots, [&](std::size_t p) {
     core::GeodesicQuery q(graph);
@@ -454,9 +485,9 @@ std::vector<double> meet_straightened(const core::SteinerGraph& graph,
     ratios[p] = pilot_ratio(points, p, d);
     if (searched) searched();
   });
-  const double ratio = *std::max_element(ratios.begin(), ratios.end());
+  const double ratio = ratios.empty() ? 1.0 : *std::max_element(ratios.begin(), ratios.end());
   const double w = graph.max_segment();
-  const std::vector<double> radius = search_radii(points, pilots, ratio, w);
+  const std::vector<double> radius = search_radii(points, estimate, pilots, ratio, w);
 
   // The other sources in a pipeline as in pairwise_in_arena: search (straightening what it
   // settles), the in-order barrier, then the joins with every earlier source's half.
@@ -677,13 +708,14 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
                                       std::size_t tokens, const std::function<void()>& searched) {
   const PairwiseMethod method = options.method;
   const std::size_t k = points.size();
+  const std::vector<double>* estimate = usable_estimate(options.estimate, k);
   std::vector<double> out(k * k, 0.0);
   std::vector<char> need(k * k, 0);
   for (std::size_t i = 0; i < k; ++i) {
     for (std::size_t j = i + 1; j < k; ++j) need[i * k + j] = 1;
   }
   if (options.straighten && method == PairwiseMethod::kMeet && k >= 3) {
-    return meet_straightened(graph, points, options.routes_out, stats, tokens, searched);
+    return meet_straightened(graph, points, estimate, options.routes_out, stats, tokens, searched);
   }
   if (options.straighten || method == PairwiseMethod::kOneWay || k < 3) {
     measure_one_way(graph, points, need, options.straighten, out, stats, searched,
@@ -695,15 +727,12 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
   // direct[i * k + j]: GD(i, j) as settled by the search from i (infinity if it was not).
   std::vector<double> direct(k * k, inf);
   std::vector<std::size_t> settled_by(k, 0);
-  // note: a fixed count of pilots, not one per thread: the radii, and so the figures, must not
-  // depend on the thread count.
-  constexpr std::size_t kPilots = 2;
-  const std::size_t pilots = std::min(kPilots, k);
+  const std::size_t pilots = estimate ? 0 : std::min(kPilots, k);
   const double ratio = search_pilots(graph, points, pilots, direct, settled_by, searched);
   // note: a pair joins where the searches overlap by the longest segment at least (the last
   // node of a shortest path inside one search is then settled by the other too).
   const double w = graph.max_segment();
-  const std::vector<double> radius = search_radii(points, pilots, ratio, w);
+  const std::vector<double> radius = search_radii(points, estimate, pilots, ratio, w);
 
   // The other sources are searched to their radii in a oneTBB pipeline of at most `tokens`
   // sources in flight, each holding one query: a serial stage hands out the sources in order,
@@ -995,6 +1024,19 @@ void score_set(const std::vector<double>& dt, const std::vector<double>& ds, std
   result.set_errors.push_back(sum / static_cast<double>(measured));
 }
 
+// The paper's Steiner distances (not straightened) of the pairs of points on graph's mesh: a
+// guess at their geodesics on another surface of the same points (PairwiseOptions::estimate).
+std::vector<double> guess_distances(const core::SteinerGraph& graph,
+                                    const std::vector<core::SurfacePoint>& points,
+                                    PairwiseMethod method, const EvalResult& result) {
+  PairwiseOptions po;
+  po.method = method;
+  po.straighten = false;
+  // note: a plain search holds a third of a straightened one's labels: the budget fits as many.
+  po.max_searches = result.max_searches;
+  return pairwise_distances(graph, points, po);
+}
+
 // One geodesic stage: the pairs of points on T (on_t) or T', exact or on the Steiner graph,
 // its progress reported as its sources finish (stage `name`); Cancelled when it was stopped.
 std::vector<double> geodesic_stage(const Geodesics& geo, bool on_t,
@@ -1002,7 +1044,7 @@ std::vector<double> geodesic_stage(const Geodesics& geo, bool on_t,
                                    const EvalOptions& options, PairwiseMethod method,
                                    std::size_t max_searches, const std::string& name,
                                    const core::Progress& progress, PairwiseStats& stats,
-                                   PairRoutes* routes_out) {
+                                   PairRoutes* routes_out, const std::vector<double>* estimate) {
   bool stop = false;  // note: written under the report lock of the pairwise call, read after it
   const std::size_t k = points.size();
   std::vector<double> d;
@@ -1031,6 +1073,7 @@ std::vector<double> geodesic_stage(const Geodesics& geo, bool on_t,
     po.straighten = options.straighten;
     po.max_searches = max_searches;
     po.routes_out = routes_out;
+    po.estimate = estimate;
     if (progress) {
       po.on_search = [&](std::size_t searched) {
         if (!progress(static_cast<double>(searched) / static_cast<double>(k), name)) stop = true;
@@ -1101,6 +1144,9 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
   PairwiseStats stats_t, stats_s;
   std::vector<std::vector<double>> dt(sets), ds(sets);
   const bool routes = options.straighten && !options.exact;
+  // Straightened: each set's pairs' paper Steiner distances on T' (one quick search a source),
+  // from which the meeting radii on both meshes are scaled.
+  std::vector<std::vector<double>> guess(routes ? sets : 0);
   std::vector<PairRoutes> routes_t(routes ? sets : 0), routes_s(routes ? sets : 0);
   const std::string kind = options.exact ? ": exact geodesics on T" : ": geodesics on T";
   for (const bool mesh_t : {false, true}) {
@@ -1109,10 +1155,16 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
       const std::string name = stage_names[set] + kind + (mesh_t ? "" : "'");
       stage(name);
       const auto t0 = std::chrono::steady_clock::now();
+      if (!mesh_t && routes) guess[set] = guess_distances(*geo.graph_s, on_s[set], method, result);
+      // note: the paper's distances on T scale from T''s; straightened, both meshes' from the
+      // same guess, so that a mesh identical to T measures 0 (up to rounding).
+      const std::vector<double>* estimate = routes                     ? &guess[set]
+                                            : mesh_t && !options.exact ? &ds[set]
+                                                                       : nullptr;
       (mesh_t ? dt : ds)[set] =
           geodesic_stage(geo, mesh_t, mesh_t ? on_t[set] : on_s[set], options, method,
                          result.max_searches, name, progress, mesh_t ? stats_t : stats_s,
-                         routes ? &(mesh_t ? routes_t : routes_s)[set] : nullptr);
+                         routes ? &(mesh_t ? routes_t : routes_s)[set] : nullptr, estimate);
       if (mesh_t && routes) {
         result.shortened += shorten_along(*geo.graph_t, on_t[set], routes_s[set], dt[set]);
         routes_s[set] = PairRoutes();

@@ -52,6 +52,14 @@ struct PairwiseOptions {
   // threads working if need be (0: no bound; at least min_searches(method) must be allowed);
   // the figures do not depend on it.
   std::size_t max_searches = 0;
+  // The same pairs' distances on another surface of the same points (estimate[a * K + b],
+  // a < b, as pairwise_distances gives them; dpts-eval gives T's searches those of T'), if
+  // known and all finite: the meeting searches' radii are then scaled from these, with no
+  // pilots searched in full, instead of from straight-line distances, so each search stops
+  // nearer where its pairs need it to. A wrong estimate costs time, not exactness: a pair the
+  // radii miss is searched one way. (Where two routes of a pair are nearly equal in length,
+  // which one a straightened search finds may depend on where its searches meet.)
+  const std::vector<double>* estimate = nullptr;
   // If given, called as each source's search finishes with the number of sources searched so
   // far (1 to K; the few pairs left to one-way queries after meeting are not counted). Calls
   // are serialized but come from any worker thread.

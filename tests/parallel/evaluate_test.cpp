@@ -5,6 +5,7 @@
 
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -77,6 +78,18 @@ TEST_CASE("a mesh identical to the DEM grid has distance error 0", "[parallel][e
   // The engine's unsimplified TIN is the same grid TIN: error 0 up to rounding.
   const auto r100 = par::evaluate_distances(t, simplified(g, 100.0), opt);
   CHECK(r100.distance_error < 1e-12);
+}
+
+TEST_CASE("a mesh identical to a DEM with no hole measures 0, its searches meeting",
+          "[parallel][evaluate]") {
+  // With no hole the searches meet in the middle, on both meshes with radii scaled from the
+  // same guess: the same searches, the same distances.
+  const auto g = test::make_grid(
+      30, 24, [](int c, int r) { return 60.0 * std::sin(c * 0.3) * std::cos(r * 0.2) + 2.0 * r; });
+  const auto t = hills_grid_mesh(g);
+  const auto r = par::evaluate_distances(t, t, eval_options(30, 2));
+  CHECK(r.original_one_way == 0);
+  CHECK(r.distance_error < 1e-12);
 }
 
 TEST_CASE("the distance error grows as fewer vertices are kept", "[parallel][evaluate]") {
@@ -212,6 +225,54 @@ TEST_CASE("straightened, meeting in the middle measures what one-way searches me
     // on San Gabriel's T each search settles about 36 % of the graph, one way 72 %.
     CHECK(meet_stats.one_way_pairs < k * (k - 1) / 4);
     CHECK(meet_stats.straighten_failed == 0);
+  }
+}
+
+TEST_CASE("meeting radii scaled from an estimate: the same distances, fewer nodes searched",
+          "[parallel][evaluate][geodesic]") {
+  // The pairs' distances on another surface (dpts-eval gives T's searches a guess from T') set
+  // the meeting radii instead of pilots searched in full and straight-line distances. A good
+  // estimate searches less; a wrong one (half the distances) leaves pairs to one-way searches:
+  // slower, the same distances; an unusable one (not finite) is not used.
+  const auto g = hills();
+  const auto mesh = hills_grid_mesh(g);
+  const auto points = core::sample_uniform(mesh, 40, 5);
+  const std::size_t k = points.size();
+  for (const bool straighten : {false, true}) {
+    CAPTURE(straighten);
+    const double factor = straighten ? par::kStraightenedDeltaFactorDem : 0.25;
+    const core::SteinerGraph graph(mesh, factor * core::mean_edge_length(mesh));
+    par::PairwiseOptions options;
+    options.straighten = straighten;
+    par::PairwiseStats ref_stats;
+    const auto ref = par::pairwise_distances(graph, points, options, &ref_stats);
+    std::vector<double> good(ref), half(ref), broken(ref);
+    for (auto& d : good) d *= 1.003;
+    for (auto& d : half) d *= 0.5;
+    broken[1] = std::numeric_limits<double>::infinity();
+    std::vector<par::PairwiseStats> stats(3);
+    std::vector<std::vector<double>> got;
+    for (const auto* estimate : {&good, &half, &broken}) {
+      options.estimate = estimate;
+      got.push_back(par::pairwise_distances(graph, points, options, &stats[got.size()]));
+    }
+    for (std::size_t e = 0; e < got.size(); ++e) {
+      std::size_t same = 0;
+      for (std::size_t i = 0; i < k; ++i) {
+        for (std::size_t j = i + 1; j < k; ++j) {
+          CAPTURE(e, i, j);
+          REQUIRE(std::isfinite(ref[i * k + j]));
+          CHECK(got[e][i * k + j] == Approx(ref[i * k + j]).epsilon(straighten ? 1e-3 : 1e-12));
+          same += std::fabs(got[e][i * k + j] / ref[i * k + j] - 1) < 1e-9;
+        }
+      }
+      CHECK(same > 0.9 * static_cast<double>(k * (k - 1) / 2));
+    }
+    CHECK(stats[0].settled < ref_stats.settled);
+    CHECK(stats[0].one_way_pairs < k * (k - 1) / 20);
+    CHECK(stats[1].one_way_pairs > ref_stats.one_way_pairs);
+    CHECK(stats[2].settled == ref_stats.settled);
+    CHECK(got[2] == ref);
   }
 }
 
