@@ -1155,7 +1155,10 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
       const std::string name = stage_names[set] + kind + (mesh_t ? "" : "'");
       stage(name);
       const auto t0 = std::chrono::steady_clock::now();
-      if (!mesh_t && routes) guess[set] = guess_distances(*geo.graph_s, on_s[set], method, result);
+      // note: one way (a memory budget that fits one search) has no radii to scale.
+      if (!mesh_t && routes && method == PairwiseMethod::kMeet) {
+        guess[set] = guess_distances(*geo.graph_s, on_s[set], method, result);
+      }
       // note: the paper's distances on T scale from T''s; straightened, both meshes' from the
       // same guess, so that a mesh identical to T measures 0 (up to rounding).
       const std::vector<double>* estimate = routes                     ? &guess[set]
