@@ -804,7 +804,7 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
                                        const PairwiseOptions& options, PairwiseStats* stats) {
   const PairwiseMethod method = options.method;
   const std::size_t max_searches = options.max_searches;
-  const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
+  const std::size_t threads = worker_threads();
   std::size_t workers = threads, tokens = unbounded_searches(threads, options.straighten);
   if (max_searches > 0) {
     if (max_searches < min_searches(method)) {
@@ -938,7 +938,7 @@ void plan_graphs(const core::TriMesh& original, const core::TriMesh& simplified,
           format_bytes(static_cast<double>(options.memory_budget_bytes)) +
           " available (--max-memory); use a larger --delta");
     }
-    const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
+    const std::size_t threads = worker_threads();
     result.max_searches =
         std::min((options.memory_budget_bytes - result.graphs_bytes) / result.search_bytes,
                  unbounded_searches(threads, options.straighten));

@@ -2,6 +2,9 @@
 // for messages.
 #include "parallel/memory.hpp"
 
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -71,6 +74,11 @@ std::string format_bytes(double bytes) {
     std::snprintf(buf, sizeof buf, "%.0f MB", std::ceil(bytes / (1 << 20)));
   }
   return buf;
+}
+
+std::size_t worker_threads() {
+  return std::min(static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()),
+                  tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
 }
 
 }  // namespace dpts::par

@@ -19,4 +19,9 @@ std::size_t available_memory_bytes();
 // "12.3 GB" / "456 MB": a byte count for messages.
 std::string format_bytes(double bytes);
 
+// The threads that may run this task arena's tasks at once: its own concurrency, bounded by a
+// tbb::global_control where one is active (dpts-par's and dpts-eval's --threads). What the
+// memory estimates count one working set per.
+std::size_t worker_threads();
+
 }  // namespace dpts::par

@@ -320,10 +320,7 @@ std::vector<core::Piece> divide_dem(const core::RasterSource& dem, const KeepTar
   return pieces;
 }
 
-std::size_t pieces_in_flight(std::size_t pieces) {
-  return std::min<std::size_t>(pieces,
-                               static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()));
-}
+std::size_t pieces_in_flight(std::size_t pieces) { return std::min(pieces, worker_threads()); }
 
 std::size_t pieces_in_flight_bytes(const std::vector<core::Piece>& pieces, int halo,
                                    std::size_t tile_bytes) {

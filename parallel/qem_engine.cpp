@@ -1,7 +1,6 @@
 // The piece engine for qem (see qem_engine.hpp).
 #include "parallel/qem_engine.hpp"
 
-#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
@@ -798,10 +797,7 @@ core::TriMesh simplify_qem(const core::RasterSource& dem, const QemEngineOptions
   };
   double merge_s = 0;              // written by the merge task, read after its wait
   std::exception_ptr merge_error;  // the same
-  const bool beside =
-      std::min<std::size_t>(
-          static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()),
-          tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)) > 1;
+  const bool beside = worker_threads() > 1;
   tbb::task_group merging;
   // The group before merged: its exception, if any, thrown here.
   auto merged = [&] {

@@ -2,6 +2,7 @@
 #include "parallel/evaluate.hpp"
 
 #include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -13,6 +14,7 @@
 #include "core/errors.hpp"
 #include "core/steiner_graph.hpp"
 #include "core/surface_sampling.hpp"
+#include "parallel/memory.hpp"
 #include "parallel/simplify.hpp"
 #include "test_support.hpp"
 
@@ -316,6 +318,24 @@ TEST_CASE("a memory budget bounds the searches at once, with the same figures",
   CHECK(one.max_searches == 1);
   CHECK(one.original_one_way == 30 * 29 / 2);
   CHECK(one.distance_error == Approx(straightened.distance_error).epsilon(0.05));
+}
+
+TEST_CASE("the searches held at once follow --threads (a global_control), not the cores alone",
+          "[parallel][evaluate][memory]") {
+  // The paper's distances: up to three searches a thread at once, less one. At --threads 1 on
+  // a machine of more cores, those of one thread (they were counted per core).
+  const auto [t, s] = hills_and_20_percent();
+  auto opt = eval_options(10, 1);
+  opt.straighten = false;
+  opt.memory_budget_bytes = std::size_t{1} << 34;  // ample: the threads bound it
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    CHECK(par::worker_threads() == 1);
+    CHECK(par::evaluate_distances(t, s, opt).max_searches == 2);
+  }
+  const std::size_t threads = par::worker_threads();
+  CHECK(threads == static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()));
+  CHECK(par::evaluate_distances(t, s, opt).max_searches == 3 * threads - 1);
 }
 
 TEST_CASE("the graph estimate counts the nodes of the graph", "[parallel][evaluate][memory]") {
