@@ -43,8 +43,9 @@ constexpr double kNearTie = 0.01;
 // note: a fixed count of pilots, not one per thread: the radii, and so the figures, must not
 // depend on the thread count.
 constexpr std::size_t kPilots = 2;
-// note: on San Gabriel's 10 % and 1 % meshes every pair's geodesic on T was within 0.3 % and
-// 1 % of the mesh's; a pair the radii miss is searched one way (slower, as exact).
+// note: with dpts-eval's guess (the paper's Steiner distances on T', a little long) no pair of
+// T was left to one-way searches on San Gabriel's 10 % and 1 % meshes; a pair the radii miss
+// is searched one way (slower, as exact).
 constexpr double kEstimateMargin = 1.02;
 
 // Squared straight-line (3D) distance between points i and j.

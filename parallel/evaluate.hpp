@@ -53,7 +53,8 @@ struct PairwiseOptions {
   // the figures do not depend on it.
   std::size_t max_searches = 0;
   // The same pairs' distances on another surface of the same points (estimate[a * K + b],
-  // a < b, as pairwise_distances gives them; dpts-eval gives T's searches those of T'), if
+  // a < b, as pairwise_distances gives them; dpts-eval gives both meshes' straightened searches
+  // the paper's Steiner distances on T', and with --steiner T's searches those of T'), if
   // known and all finite: the meeting searches' radii are then scaled from these, with no
   // pilots searched in full, instead of from straight-line distances, so each search stops
   // nearer where its pairs need it to. A wrong estimate costs time, not exactness: a pair the
