@@ -173,51 +173,72 @@ bool PathStraightener::build_strip(const SurfacePoint& source,
   return strip_.back() == target.face && strip_.front() == source.face;
 }
 
-bool PathStraightener::unfold(const SurfacePoint& source, const SurfacePoint& target) {
+bool PathStraightener::unfold(const SurfacePoint& source, const SurfacePoint& target,
+                              std::size_t from) {
   const TriMesh& m = g_.mesh();
-  portals_.clear();
   // The current face: its corners and their plane positions.
-  std::array<std::uint32_t, 3> ids = m.faces[strip_[0]];
+  std::array<std::uint32_t, 3> ids;
   std::array<Point2, 3> p2;
-  {
+  auto lift2 = [&](const SurfacePoint& s) {
+    const auto w = barycentric(at(m, ids[0]), at(m, ids[1]), at(m, ids[2]), Vec3{s.x, s.y, s.z});
+    return Point2{p2[0].x + w[0] * (p2[1].x - p2[0].x) + w[1] * (p2[2].x - p2[0].x),
+                  p2[0].y + w[0] * (p2[1].y - p2[0].y) + w[1] * (p2[2].y - p2[0].y)};
+  };
+  if (from == 0) {
+    portals_.clear();
+    unfolded_.clear();
+    ids = m.faces[strip_[0]];
     const Vec3 a = at(m, ids[0]), b = at(m, ids[1]), c = at(m, ids[2]);
     const Vec3 ab = sub(b, a), ac = sub(c, a);
     const double len = std::sqrt(dot(ab, ab));
     if (!(len > 0)) return false;
     p2 = {Point2{0, 0}, Point2{len, 0}, Point2{dot(ac, ab) / len, cross_norm(ab, ac) / len}};
     if (!(p2[2].y > 1e-12 * len)) return false;
+    const Point2 s2 = lift2(source);
+    portals_.push_back({kNoVertex, kNoVertex, s2, s2});
+    unfolded_.push_back({ids, p2});
+    from = 1;
+  } else {
+    // note: face j's unfolding depends on faces 0..j alone: those the last call unfolded are
+    // kept (the same bits as unfolding them again).
+    portals_.resize(from);
+    unfolded_.resize(from);
+    ids = unfolded_.back().ids;
+    p2 = unfolded_.back().p2;
   }
-  auto lift2 = [&](const SurfacePoint& s) {
-    const auto w = barycentric(at(m, ids[0]), at(m, ids[1]), at(m, ids[2]), Vec3{s.x, s.y, s.z});
-    return Point2{p2[0].x + w[0] * (p2[1].x - p2[0].x) + w[1] * (p2[2].x - p2[0].x),
-                  p2[0].y + w[0] * (p2[1].y - p2[0].y) + w[1] * (p2[2].y - p2[0].y)};
-  };
-  const Point2 s2 = lift2(source);
-  portals_.push_back({kNoVertex, kNoVertex, s2, s2});
-  for (std::size_t j = 1; j < strip_.size(); ++j) {
-    const auto& next = m.faces[strip_[j]];
-    // The shared edge (u, w), the previous face's corner off it (k) and the new one (r).
-    int k = -1, shared = 0;
-    std::uint32_t r = kNoVertex;
-    for (int c = 0; c < 3; ++c) {
-      if (next[0] == ids[c] || next[1] == ids[c] || next[2] == ids[c]) {
-        ++shared;
-      } else {
-        k = c;
+  if (hinges_.empty()) hinges_.resize(std::size_t{1} << kHingeBits);
+  for (std::size_t j = from; j < strip_.size(); ++j) {
+    Hinge& h = hinges_[hinge_slot(strip_[j])];
+    if (h.face != strip_[j] || h.prev != ids) {
+      const auto& next = m.faces[strip_[j]];
+      // The shared edge (u, w), the previous face's corner off it (k) and the new one (r).
+      int k = -1, shared = 0;
+      std::uint32_t r = kNoVertex;
+      for (int c = 0; c < 3; ++c) {
+        if (next[0] == ids[c] || next[1] == ids[c] || next[2] == ids[c]) {
+          ++shared;
+        } else {
+          k = c;
+        }
       }
+      if (shared != 2 || k < 0) return false;
+      for (std::uint32_t c : next) {
+        if (c != ids[0] && c != ids[1] && c != ids[2]) r = c;
+      }
+      if (r == kNoVertex) return false;
+      const int iu = (k + 1) % 3, iw = (k + 2) % 3;
+      // r at its 3D offsets along and off the edge.
+      const Vec3 u3 = at(m, ids[iu]), e3 = sub(at(m, ids[iw]), u3), r3 = sub(at(m, r), u3);
+      const double len = std::sqrt(dot(e3, e3));
+      const double along = dot(r3, e3) / len, off = cross_norm(e3, r3) / len;
+      if (!(len > 0) || !(off > 1e-12 * len)) return false;
+      h = Hinge{strip_[j], ids, r, k, len, along, off};
     }
-    if (shared != 2 || k < 0) return false;
-    for (std::uint32_t c : next) {
-      if (c != ids[0] && c != ids[1] && c != ids[2]) r = c;
-    }
-    if (r == kNoVertex) return false;
-    const int iu = (k + 1) % 3, iw = (k + 2) % 3;
+    const int k = h.k, iu = (k + 1) % 3, iw = (k + 2) % 3;
+    const std::uint32_t r = h.r;
+    const double len = h.len, along = h.along, off = h.off;
+    // r in the plane, on the side of the edge away from b.
     const Point2 u2 = p2[iu], w2 = p2[iw], b2 = p2[k];
-    // r in the plane: at its 3D offsets along and off the edge, on the side away from b.
-    const Vec3 u3 = at(m, ids[iu]), e3 = sub(at(m, ids[iw]), u3), r3 = sub(at(m, r), u3);
-    const double len = std::sqrt(dot(e3, e3));
-    const double along = dot(r3, e3) / len, off = cross_norm(e3, r3) / len;
-    if (!(len > 0) || !(off > 1e-12 * len)) return false;
     const double dx = (w2.x - u2.x) / len, dy = (w2.y - u2.y) / len;
     const double side = -dy * (b2.x - u2.x) + dx * (b2.y - u2.y);  // b's side of the edge
     const double s = side > 0 ? -1.0 : 1.0;
@@ -231,30 +252,40 @@ bool PathStraightener::unfold(const SurfacePoint& source, const SurfacePoint& ta
     }
     ids = {ids[iu], ids[iw], r};
     p2 = {u2, w2, r2};
+    unfolded_.push_back({ids, p2});
   }
   const Point2 t2 = lift2(target);
   portals_.push_back({kNoVertex, kNoVertex, t2, t2});
   return true;
 }
 
-double PathStraightener::funnel() {
+double PathStraightener::funnel(std::size_t from) {
   // The simple funnel: the apex, and the funnel's left and right ends (portal indices); a
   // portal end that is the apex itself constrains nothing.
   auto cross = [](Point2 a, Point2 b, Point2 c) {
     return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
   };
   auto same = [](Point2 a, Point2 b) { return a.x == b.x && a.y == b.y; };
-  taut_.assign(1, portals_[0].l);
-  bends_.clear();
-  Point2 apex = portals_[0].l, left = apex, right = apex;
-  std::size_t left_i = 0, right_i = 0;
+  // note: a bend the last call fixed having read only portals before `from`, which are
+  // unchanged, is fixed again, and the funnel goes on from it as it did then (the same bits
+  // as a full run).
+  std::size_t kept = 0;
+  while (kept < bends_.size() && bends_[kept].seen < from) ++kept;
+  bends_.resize(kept);
+  kept_bends_ = kept;
+  taut_.resize(kept + 1);
+  taut_[0] = portals_[0].l;
+  Point2 apex = taut_.back(), left = apex, right = apex;
+  std::size_t left_i = kept > 0 ? bends_.back().portal : 0, right_i = left_i;
+  std::size_t seen = kept > 0 ? bends_.back().seen : 0;  // the last portal read
   auto bend = [&](Point2 p, std::size_t i, std::uint32_t vertex) {
     taut_.push_back(p);
-    bends_.push_back({vertex, i});
+    bends_.push_back({vertex, i, seen});
     apex = left = right = p;
     left_i = right_i = i;
   };
-  for (std::size_t i = 1; i < portals_.size(); ++i) {
+  for (std::size_t i = left_i + 1; i < portals_.size(); ++i) {
+    seen = std::max(seen, i);
     const Portal& p = portals_[i];
     // note: an end at the apex (unconstrained) narrows anything; a new end is checked against
     // the other side unless that one is unconstrained too, or the same point (the target).
@@ -322,9 +353,12 @@ double PathStraightener::length(const SurfacePoint& source, const std::vector<st
   std::vector<Reroute> reroutes;
   std::vector<std::uint32_t> fans;
   double best = std::numeric_limits<double>::infinity();
+  // note: each pass unfolds and pulls taut again from the first face the last one's reroutes
+  // changed.
+  std::size_t from = 0;
   for (int pass = 0; pass < kMaxPasses; ++pass) {
-    if (!unfold(source, target)) break;
-    const double len = funnel();
+    if (!unfold(source, target, from)) break;
+    const double len = funnel(from);
     ++stats_.passes;
     // note: each reroute shortens the path; one that does not (rounding) ends the passes.
     if (!(len < best * (1 - 1e-12))) return std::min(len, best);
@@ -339,6 +373,9 @@ double PathStraightener::length(const SurfacePoint& source, const std::vector<st
       std::size_t first = b.portal - 1, last = b.portal;
       while (first > 0 && contains(strip_[first - 1], b.vertex)) --first;
       while (last + 1 < strip_.size() && contains(strip_[last + 1], b.vertex)) ++last;
+      // note: a bend kept from the last pass whose faces and neighbouring bends are too was
+      // found there not to be rerouted (a reroute would have changed those faces).
+      if (k + 1 < kept_bends_ && last + 1 < from) continue;
       if (first < free_from) continue;
       const double total = total_angle(b.vertex, strip_[first]);
       if (total < 0) continue;  // on the outline: nothing on the other side
@@ -363,6 +400,10 @@ double PathStraightener::length(const SurfacePoint& source, const std::vector<st
       j = r.last;
     }
     for (; j < next_strip_.size(); ++j) push_face(next_strip_[j]);
+    from = 0;
+    while (from < strip_.size() && from < next_strip_.size() && strip_[from] == next_strip_[from]) {
+      ++from;
+    }
   }
   if (best < std::numeric_limits<double>::infinity()) return best;
   ++stats_.failed;

@@ -67,11 +67,29 @@ class PathStraightener {
     std::uint32_t left, right;
     Point2 l, r;
   };
-  // A vertex the taut path bends at: the portal (1..faces - 1) whose end it is.
+  // A vertex the taut path bends at: the portal (1..faces - 1) whose end it is, and the
+  // portals the funnel had read when it fixed the bend (it depends on no later one).
   struct Bend {
     std::uint32_t vertex;
-    std::size_t portal;
+    std::size_t portal, seen;
   };
+  // A face of the strip unfolded: its corners and their plane positions.
+  struct Unfolded {
+    std::array<std::uint32_t, 3> ids;
+    std::array<Point2, 3> p2;
+  };
+  // How face `face` unfolds after a face of corners `prev` (in that order): the corner of prev
+  // off their shared edge (k) and its own (r), and r's offsets along and off the edge (len).
+  struct Hinge {
+    std::uint32_t face = 0xFFFFFFFFu;
+    std::array<std::uint32_t, 3> prev{};
+    std::uint32_t r = 0;
+    int k = 0;
+    double len = 0, along = 0, off = 0;
+  };
+  // The hinge cache's slot for face f.
+  static std::size_t hinge_slot(std::uint32_t f) { return (f * 2654435761u) >> (32 - kHingeBits); }
+  static constexpr int kHingeBits = 13;
 
   // The vertices the last taut path bent at, seen from above, into route.
   void bends_route(std::vector<std::array<double, 2>>& route) const;
@@ -80,8 +98,12 @@ class PathStraightener {
   void push_face(std::uint32_t f);
   bool walk_around(std::uint32_t v, std::uint32_t from, std::uint32_t to, bool shortest,
                    std::uint32_t avoid, std::vector<std::uint32_t>& fan) const;
-  bool unfold(const SurfacePoint& source, const SurfacePoint& target);
-  double funnel();
+  // The strip's portals from its face `from` on (0: all; else the faces before it are those
+  // the last call unfolded); false where a face is degenerate.
+  bool unfold(const SurfacePoint& source, const SurfacePoint& target, std::size_t from);
+  // The taut path's length through the portals; the bends that read only portals before
+  // `from` are kept from the last call (0: none).
+  double funnel(std::size_t from);
   bool contains(std::uint32_t f, std::uint32_t v) const;
   double corner_angle(std::uint32_t f, std::uint32_t v) const;
   double total_angle(std::uint32_t v, std::uint32_t f) const;
@@ -90,9 +112,15 @@ class PathStraightener {
 
   const SteinerGraph& g_;
   std::vector<std::uint32_t> strip_, next_strip_, fan_;  // faces of the strip, in order
-  std::vector<Portal> portals_;           // portals_[0] and back(): the source and the target
-  std::vector<Point2> taut_;              // the taut path's points
+  std::vector<Portal> portals_;     // portals_[0] and back(): the source and the target
+  std::vector<Unfolded> unfolded_;  // per face of the strip
+  // note: the faces a pass unfolds are mostly those the last pass (or the last path from the
+  // same source) did, after the same faces: their hinges, the arithmetic of the mesh's
+  // coordinates, are kept by face (direct-mapped, 2^kHingeBits slots) and give the same bits.
+  std::vector<Hinge> hinges_;
+  std::vector<Point2> taut_;  // the taut path's points
   std::vector<Bend> bends_;
+  std::size_t kept_bends_ = 0;  // bends_ the last funnel() kept from the call before
   std::vector<std::uint32_t> path_, around_, tried_;
   Stats stats_;
 };
