@@ -15,6 +15,9 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr int kMaxFan = 4096;
 // Most passes of pulling taut and rerouting for one path (each pass strictly shortens it).
 constexpr int kMaxPasses = 256;
+// shortest(): how many nodes back from the target's face another path is followed to see
+// whether it joins one tried already.
+constexpr int kJoinSteps = 8;
 
 struct Vec3 {
   double x, y, z;
@@ -430,6 +433,15 @@ double PathStraightener::shortest(const GeodesicQuery& query, const SurfacePoint
     tried_.push_back(path_.back());
     if (path_.size() > 1) tried_.push_back(path_[path_.size() - 2]);
   }
+  // note: a path whose nodes join one tried already within kJoinSteps of the target's face, and
+  // within its last `tail` (the search's paths form a tree: from there on they are one), takes
+  // the same route but for its last faces: it is not tried again (about a third of all paths
+  // straightened on San Gabriel; against exact geodesics the measure moved by 0.06 % at most
+  // on three DEMs, every mode at 10 and 50 %). Where the route is no longer than two tails,
+  // every path is tried (two routes round a hill share only their first nodes).
+  const double tail = kJoinSteps * g_.max_segment();
+  on_paths_.assign(path_.begin(), path_.end());
+  std::sort(on_paths_.begin(), on_paths_.end());
   g_.face_nodes(target_point.face, around_);
   for (std::uint32_t v : around_) {
     if (!std::isfinite(query.settled_distance(v))) continue;
@@ -439,7 +451,17 @@ double PathStraightener::shortest(const GeodesicQuery& query, const SurfacePoint
       continue;
     }
     tried_.push_back(p);
+    bool joins = false;
+    std::uint32_t w = p;
+    for (int step = 0; step < kJoinSteps && w != LabelHeap::kNone && !joins; ++step) {
+      joins = std::binary_search(on_paths_.begin(), on_paths_.end(), w) &&
+              query.settled_distance(w) >= steiner_distance - tail && steiner_distance > 2 * tail;
+      w = query.pred(w);
+    }
+    if (joins) continue;
     query.path_to_node(v, path_);
+    on_paths_.insert(on_paths_.end(), path_.begin(), path_.end());
+    std::sort(on_paths_.begin(), on_paths_.end());
     const double len = length(source, path_, target_point);
     if (len >= 0 && len < best) {
       best = len;

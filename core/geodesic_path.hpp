@@ -34,8 +34,9 @@ class PathStraightener {
   // `target` (at `target_point`): the path it settled the target through, and those through
   // every other node of the target's face (where the search's cut locus, two routes of nearly
   // equal length around some hill, passes by the target, its boundary nodes are reached by
-  // both; the graph's error may have ranked the longer first). Infinity where the target was
-  // not reached; the Steiner distance where no path could be straightened.
+  // both; the graph's error may have ranked the longer first; a path that joins one tried
+  // already a few nodes back from the target's face is not tried). Infinity where the target
+  // was not reached; the Steiner distance where no path could be straightened.
   // With route, the shortest one's route into it (the mesh vertices it bends at, seen from
   // above, in order; empty: straight, or none was straightened), for along() on another mesh.
   double shortest(const GeodesicQuery& query, const SurfacePoint& source, std::size_t target,
@@ -121,7 +122,7 @@ class PathStraightener {
   std::vector<Point2> taut_;  // the taut path's points
   std::vector<Bend> bends_;
   std::size_t kept_bends_ = 0;  // bends_ the last funnel() kept from the call before
-  std::vector<std::uint32_t> path_, around_, tried_;
+  std::vector<std::uint32_t> path_, around_, tried_, on_paths_;
   Stats stats_;
 };
 

@@ -41,7 +41,7 @@ struct PairwiseOptions {
   // Each pair searched with straight segments across faces (GeodesicQuery::set_anchored),
   // then its path pulled taut into a locally shortest geodesic (core::PathStraightener):
   // exact but for the rare pair whose search still took the longer of two routes nearly equal
-  // in length (so meeting, up to 4 meeting nodes apart are tried for each pair, and one way,
+  // in length (so meeting, up to 2 meeting nodes apart are tried for each pair, and one way,
   // the paths from both ends where both searches reach the other). false: the paper's Steiner
   // distances, a few tenths of a percent to several percent long depending on delta.
   bool straighten = true;
