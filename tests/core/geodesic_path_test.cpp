@@ -264,6 +264,38 @@ TEST_CASE("straightened paths on rough terrain are exact but for a few near ties
   CHECK(s.stats().failed == 0);
 }
 
+TEST_CASE("a straightener reused over many paths gives each the length a fresh one gives",
+          "[core][geodesic]") {
+  // A straightener keeps what its passes did (each pass redoes only what its reroutes changed)
+  // and each face's unfolding, by face, for later passes and later paths: a length must not
+  // depend on the paths pulled taut before it. Rough heights, so paths reroute over many
+  // passes, on more faces (15,642) than the unfolding cache has slots, so entries are evicted.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> height(0.0, 12.0);
+  const auto m = grid_surface(100, 80, 10.0, [&](double, double) { return height(rng); });
+  const core::SteinerGraph g(m, 12.0);
+  const auto pts = core::sample_uniform(m, 10, 3);
+  core::PathStraightener reused(g);
+  std::size_t paths = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    core::GeodesicQuery q(g);
+    q.set_anchored(true);
+    const auto targets = others(pts, i);
+    std::vector<double> d;
+    q.distances(pts[i], targets, d);
+    for (std::size_t j = 0; j < targets.size(); ++j) {
+      core::PathStraightener fresh(g);
+      CAPTURE(i, j);
+      CHECK(reused.shortest(q, pts[i], j, targets[j], d[j]) ==
+            fresh.shortest(q, pts[i], j, targets[j], d[j]));
+      paths += fresh.stats().paths;
+    }
+  }
+  CHECK(reused.stats().paths == paths);
+  CHECK(reused.stats().passes > 2 * reused.stats().paths);
+  CHECK(reused.stats().failed == 0);
+}
+
 TEST_CASE("anchored searches find the shortest route where the Steiner graph ranks near ties wrong",
           "[core][geodesic][exact]") {
   // The rough terrain above, at a coarse delta: the Steiner graph's lengths, each several
