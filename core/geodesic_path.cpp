@@ -275,7 +275,6 @@ double PathStraightener::funnel(std::size_t from) {
   std::size_t kept = 0;
   while (kept < bends_.size() && bends_[kept].seen < from) ++kept;
   bends_.resize(kept);
-  kept_bends_ = kept;
   taut_.resize(kept + 1);
   taut_[0] = portals_[0].l;
   Point2 apex = taut_.back(), left = apex, right = apex;
@@ -376,9 +375,10 @@ double PathStraightener::length(const SurfacePoint& source, const std::vector<st
       std::size_t first = b.portal - 1, last = b.portal;
       while (first > 0 && contains(strip_[first - 1], b.vertex)) --first;
       while (last + 1 < strip_.size() && contains(strip_[last + 1], b.vertex)) ++last;
-      // note: a bend kept from the last pass whose faces and neighbouring bends are too was
-      // found there not to be rerouted (a reroute would have changed those faces).
-      if (k + 1 < kept_bends_ && last + 1 < from) continue;
+      // note: a bend kept from the last pass (fixed reading only portals before `from`: a bend
+      // this pass fixed read a later one) whose faces and next bend are too was found there not
+      // to be rerouted (a reroute would have changed those faces).
+      if (k + 1 < bends_.size() && bends_[k + 1].seen < from && last + 1 < from) continue;
       if (first < free_from) continue;
       const double total = total_angle(b.vertex, strip_[first]);
       if (total < 0) continue;  // on the outline: nothing on the other side
@@ -403,10 +403,9 @@ double PathStraightener::length(const SurfacePoint& source, const std::vector<st
       j = r.last;
     }
     for (; j < next_strip_.size(); ++j) push_face(next_strip_[j]);
-    from = 0;
-    while (from < strip_.size() && from < next_strip_.size() && strip_[from] == next_strip_[from]) {
-      ++from;
-    }
+    from = static_cast<std::size_t>(
+        std::mismatch(strip_.begin(), strip_.end(), next_strip_.begin(), next_strip_.end()).first -
+        strip_.begin());
   }
   if (best < std::numeric_limits<double>::infinity()) return best;
   ++stats_.failed;
@@ -440,8 +439,12 @@ double PathStraightener::shortest(const GeodesicQuery& query, const SurfacePoint
   // on three DEMs, every mode at 10 and 50 %). Where the route is no longer than two tails,
   // every path is tried (two routes round a hill share only their first nodes).
   const double tail = kJoinSteps * g_.max_segment();
-  on_paths_.assign(path_.begin(), path_.end());
-  std::sort(on_paths_.begin(), on_paths_.end());
+  const bool check_joins = steiner_distance > 2 * tail;
+  on_paths_.clear();
+  if (check_joins) {
+    on_paths_.assign(path_.begin(), path_.end());
+    std::sort(on_paths_.begin(), on_paths_.end());
+  }
   g_.face_nodes(target_point.face, around_);
   for (std::uint32_t v : around_) {
     if (!std::isfinite(query.settled_distance(v))) continue;
@@ -453,15 +456,18 @@ double PathStraightener::shortest(const GeodesicQuery& query, const SurfacePoint
     tried_.push_back(p);
     bool joins = false;
     std::uint32_t w = p;
-    for (int step = 0; step < kJoinSteps && w != LabelHeap::kNone && !joins; ++step) {
+    for (int step = 0; check_joins && step < kJoinSteps && w != LabelHeap::kNone && !joins;
+         ++step) {
       joins = std::binary_search(on_paths_.begin(), on_paths_.end(), w) &&
-              query.settled_distance(w) >= steiner_distance - tail && steiner_distance > 2 * tail;
+              query.settled_distance(w) >= steiner_distance - tail;
       w = query.pred(w);
     }
     if (joins) continue;
     query.path_to_node(v, path_);
-    on_paths_.insert(on_paths_.end(), path_.begin(), path_.end());
-    std::sort(on_paths_.begin(), on_paths_.end());
+    if (check_joins) {
+      on_paths_.insert(on_paths_.end(), path_.begin(), path_.end());
+      std::sort(on_paths_.begin(), on_paths_.end());
+    }
     const double len = length(source, path_, target_point);
     if (len >= 0 && len < best) {
       best = len;

@@ -121,7 +121,6 @@ class PathStraightener {
   std::vector<Hinge> hinges_;
   std::vector<Point2> taut_;  // the taut path's points
   std::vector<Bend> bends_;
-  std::size_t kept_bends_ = 0;  // bends_ the last funnel() kept from the call before
   std::vector<std::uint32_t> path_, around_, tried_, on_paths_;
   Stats stats_;
 };
