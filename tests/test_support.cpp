@@ -137,6 +137,12 @@ RunResult run(const std::string& exe, const std::vector<std::string>& args,
   std::vector<char*> envp;
   for (auto& e : env_strings) envp.push_back(e.data());
   envp.push_back(nullptr);
+  std::vector<char*> argv;
+  argv.push_back(const_cast<char*>(exe.c_str()));
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  // note: the child calls only async-signal-safe functions (no allocation) until execve: a
+  // test may fork beside other threads (TBB's workers, a reader), whose locks it would inherit.
   const pid_t pid = ::fork();
   if (pid == 0) {
     const int out = options.stdout_to.empty()
@@ -165,10 +171,6 @@ RunResult run(const std::string& exe, const std::vector<std::string>& args,
       ::setrlimit(RLIMIT_CPU, &limit);
     }
     if (!options.cwd.empty() && ::chdir(options.cwd.c_str()) != 0) ::_exit(126);
-    std::vector<char*> argv;
-    argv.push_back(const_cast<char*>(exe.c_str()));
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
     ::execve(exe.c_str(), argv.data(), envp.data());
     ::_exit(127);
   }
