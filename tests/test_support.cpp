@@ -198,7 +198,24 @@ RunResult run(const std::string& exe, const std::vector<std::string>& args,
           std::chrono::duration<double>(std::chrono::steady_clock::now() - sent_at).count();
     }
   } else {
-    ::waitpid(pid, &status, 0);
+    // note: polled, with sleeps from 0.5 ms growing to 10 ms: a quick child is not slowed.
+    const auto start = std::chrono::steady_clock::now();
+    auto nap = std::chrono::microseconds(500);
+    while (::waitpid(pid, &status, WNOHANG) == 0) {
+      if (std::chrono::steady_clock::now() - start >
+          std::chrono::duration<double>(options.wall_limit_s)) {
+        ::kill(pid, SIGKILL);
+        ::waitpid(pid, &status, 0);
+        std::string command = exe;
+        for (const auto& a : args) command += " " + a;
+        std::cerr << "test::run: " << command << ": still running after " << options.wall_limit_s
+                  << " s, killed; its stderr:\n"
+                  << file_bytes(err_path) << "\n";
+        break;
+      }
+      std::this_thread::sleep_for(nap);
+      nap = std::min(nap * 2, std::chrono::microseconds(10000));
+    }
   }
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   r.out = file_bytes(out_path);

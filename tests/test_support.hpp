@@ -59,6 +59,11 @@ struct RunOptions {
   bool close_stderr = false;            // start the child with descriptor 2 closed (2>&-)
   std::size_t address_space_limit = 0;  // RLIMIT_AS in bytes (0: none)
   int cpu_limit_s = 0;  // RLIMIT_CPU's soft limit (0: none): SIGXCPU kills past it (no core)
+  // A child still running after this many seconds is killed (SIGKILL: exit code 137) and
+  // reported with its command and stderr, so that a hang fails its own checks, named, before
+  // ctest's TIMEOUT of 1200 s ends the whole test (the slowest test, under ThreadSanitizer,
+  // takes 227 s in all).
+  double wall_limit_s = 900;
   // Environment variables set (NAME, value) in the child only, over ours.
   std::vector<std::pair<std::string, std::string>> env;
 };

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <fstream>
@@ -478,6 +479,18 @@ TEST_CASE("an output that is a link, a FIFO or a device is written through, neve
     CHECK(r.err ==
           "dpts-par: error: " + fx.dir.path().string() + ": is a folder, not an output file\n");
   }
+}
+
+TEST_CASE("the harness kills a child that outlives its wall limit", "[harness]") {
+  test::RunOptions brief;
+  brief.wall_limit_s = 0.5;
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto r = test::run("/bin/sleep", {"30"}, brief);
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  CHECK(r.exit_code == 128 + SIGKILL);
+  CHECK(s < 10);
+  // A quick child is waited for as before.
+  CHECK(test::run("/bin/true", {}, brief).exit_code == 0);
 }
 
 TEST_CASE("a double dash ends the options: an input named like a flag", "[cli][robust]") {
