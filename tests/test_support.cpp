@@ -175,47 +175,40 @@ RunResult run(const std::string& exe, const std::vector<std::string>& args,
     ::_exit(127);
   }
   int status = 0;
-  const bool interrupt = !options.signal_when.empty() || options.signal_after_s > 0;
+  // note: one loop for every child: polled, with sleeps from 0.5 ms growing to 10 ms (a quick
+  // child is not slowed), sending the signal when asked and killing the child past the wall
+  // limit (an interrupted run that does not stop included).
   RunResult r;
-  if (interrupt) {
-    const auto start = std::chrono::steady_clock::now();
-    auto sent_at = start;
-    bool sent = false;
-    while (::waitpid(pid, &status, WNOHANG) == 0) {
-      const double t =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      if (!sent && ((!options.signal_when.empty() &&
-                     file_bytes(err_path).find(options.signal_when) != std::string::npos) ||
-                    (options.signal_after_s > 0 && t >= options.signal_after_s))) {
-        ::kill(pid, options.signal);
-        sent = true;
-        sent_at = std::chrono::steady_clock::now();
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  const auto start = std::chrono::steady_clock::now();
+  auto sent_at = start;
+  bool sent = false;
+  auto nap = std::chrono::microseconds(500);
+  while (::waitpid(pid, &status, WNOHANG) == 0) {
+    const double t =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (t > options.wall_limit_s) {
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+      std::string command = exe;
+      for (const auto& a : args) command += " " + a;
+      std::cerr << "test::run: " << command << ": still running after " << options.wall_limit_s
+                << " s, killed; its stderr:\n"
+                << file_bytes(err_path) << "\n";
+      break;
     }
-    if (sent) {
-      r.seconds_after_signal =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - sent_at).count();
+    if (!sent && ((!options.signal_when.empty() &&
+                   file_bytes(err_path).find(options.signal_when) != std::string::npos) ||
+                  (options.signal_after_s > 0 && t >= options.signal_after_s))) {
+      ::kill(pid, options.signal);
+      sent = true;
+      sent_at = std::chrono::steady_clock::now();
     }
-  } else {
-    // note: polled, with sleeps from 0.5 ms growing to 10 ms: a quick child is not slowed.
-    const auto start = std::chrono::steady_clock::now();
-    auto nap = std::chrono::microseconds(500);
-    while (::waitpid(pid, &status, WNOHANG) == 0) {
-      if (std::chrono::steady_clock::now() - start >
-          std::chrono::duration<double>(options.wall_limit_s)) {
-        ::kill(pid, SIGKILL);
-        ::waitpid(pid, &status, 0);
-        std::string command = exe;
-        for (const auto& a : args) command += " " + a;
-        std::cerr << "test::run: " << command << ": still running after " << options.wall_limit_s
-                  << " s, killed; its stderr:\n"
-                  << file_bytes(err_path) << "\n";
-        break;
-      }
-      std::this_thread::sleep_for(nap);
-      nap = std::min(nap * 2, std::chrono::microseconds(10000));
-    }
+    std::this_thread::sleep_for(nap);
+    nap = std::min(nap * 2, std::chrono::microseconds(10000));
+  }
+  if (sent) {
+    r.seconds_after_signal =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - sent_at).count();
   }
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   r.out = file_bytes(out_path);

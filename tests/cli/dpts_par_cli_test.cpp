@@ -435,7 +435,7 @@ TEST_CASE("an output that is a link, a FIFO or a device is written through, neve
     // note: the read end is opened here, without blocking, and the pipe made big enough for
     // the whole output, so the run needs no reader meanwhile. A reader thread blocked in
     // open() would wait forever for a run that never opens the FIFO: CI's AddressSanitizer run
-    // hung in this section (not reproduced here in 45 runs under ASan, TSan and Release).
+    // hung in this section (not reproduced here under ASan, TSan or Release).
     const int fd = ::open(fifo.c_str(), O_RDONLY | O_NONBLOCK);
     REQUIRE(fd >= 0);
     REQUIRE(::fcntl(fd, F_SETPIPE_SZ, 1 << 20) >= (1 << 20));
