@@ -197,18 +197,29 @@ class Collapser {
       }
     }
     heap_.heapify();
+    full_at_.assign(fv_.size(), kNone);
+    stamp_.assign(xyz_.size() / 3, 0);
     const std::size_t start = alive_;
     const double span = start > keep ? static_cast<double>(start - keep) : 1.0;
     while (alive_ > keep && !heap_.empty()) {
       const double key = heap_.top_key();
       const std::uint32_t e = heap_.pop();
+      // note: an interior edge queued again at its full cost, whose ends' stars no collapse
+      // has touched since, comes up at that same cost: planned without the area term's walk
+      // (its cost would be the key). An outline edge's choice of the end that goes weighs
+      // the area term: planned in full.
+      const bool same = full_at_[e] != kNone && opp_[e] != kNone &&
+                        std::max(stamp_[src(e)], stamp_[dst(e)]) <= full_at_[e];
+      full_at_[e] = kNone;
       Plan p;
-      if (!plan(e, p)) {
+      if (!plan(e, p, !same)) {
         ++r.refused;
         continue;
       }
+      if (same) p.cost = key;
       if (p.cost > key && !heap_.empty() && p.cost > heap_.top_key()) {
         heap_.set(e, p.cost);  // its cost went up since it was queued (see collapse): later
+        full_at_[e] = collapses_;
         continue;
       }
       if (!plane_.empty() && !to_plane(p)) {
@@ -233,6 +244,8 @@ class Collapser {
   void result(QemResult& r) {
     heap_ = IndexedMinHeap();
     edges_ = {};
+    full_at_ = {};
+    stamp_ = {};
     opp_ = {};
     out_ = {};
     area_ = {};
@@ -297,26 +310,39 @@ class Collapser {
 
   void link_opposites() {
     // The half-edges bucketed by their edge's lower vertex (a counting sort: a sort of all of
-    // them was 4 % of qem's time); within a bucket (a few), those of one edge paired.
+    // them was 4 % of qem's time), each with its higher vertex; within a bucket (a few), those
+    // of one edge paired.
     const std::size_t n = xyz_.size() / 3, m = fv_.size();
-    auto lo = [&](std::uint32_t h) { return std::min(src(h), dst(h)); };
-    auto hi = [&](std::uint32_t h) { return std::max(src(h), dst(h)); };
-    std::vector<std::uint32_t> first(n + 1, 0), by(m);
-    for (std::uint32_t h = 0; h < m; ++h) ++first[lo(h) + 1];
+    // Calls fn(h, lower, higher) for every half-edge, face by face.
+    auto each = [&](auto&& fn) {
+      for (std::uint32_t h = 0; h < m; h += 3) {
+        const std::uint32_t v[3] = {fv_[h], fv_[h + 1], fv_[h + 2]};
+        for (std::uint32_t k = 0; k < 3; ++k) {
+          const std::uint32_t s = v[k], t = v[k == 2 ? 0 : k + 1];
+          fn(h + k, std::min(s, t), std::max(s, t));
+        }
+      }
+    };
+    std::vector<std::uint32_t> first(n + 1, 0);
+    each([&](std::uint32_t, std::uint32_t lo, std::uint32_t) { ++first[lo + 1]; });
     for (std::size_t v = 0; v < n; ++v) first[v + 1] += first[v];
+    std::vector<std::uint64_t> by(m);  // (higher vertex << 32) | half-edge, by lower vertex
     {
       std::vector<std::uint32_t> at(first.begin(), first.end() - 1);
-      for (std::uint32_t h = 0; h < m; ++h) by[at[lo(h)]++] = h;
+      each([&](std::uint32_t h, std::uint32_t lo, std::uint32_t hi) {
+        by[at[lo]++] = std::uint64_t{hi} << 32 | h;
+      });
     }
     opp_.assign(m, kNone);
     for (std::size_t v = 0; v < n; ++v) {
       for (std::uint32_t i = first[v]; i < first[v + 1]; ++i) {
-        const std::uint32_t h = by[i];
+        const auto h = static_cast<std::uint32_t>(by[i]);
         if (opp_[h] != kNone) continue;  // paired with an earlier one
+        const std::uint64_t hi = by[i] >> 32;
         std::uint32_t g = kNone, count = 1;
         for (std::uint32_t j = i + 1; j < first[v + 1]; ++j) {
-          if (hi(by[j]) != hi(h)) continue;
-          if (++count == 2) g = by[j];
+          if (by[j] >> 32 != hi) continue;
+          if (++count == 2) g = static_cast<std::uint32_t>(by[j]);
         }
         if (count > 2) throw std::invalid_argument("qem: an edge has more than two faces");
         if (count == 2) {
@@ -567,6 +593,8 @@ class Collapser {
 
   void normalize_out(std::uint32_t v) {
     // Turn clockwise to the outline edge out of v, if there is one.
+    // note: an interior vertex has none (the walk would come back to out_[v]).
+    if (!border(v)) return;
     const std::uint32_t first = out_[v];
     std::uint32_t h = first;
     for (;;) {
@@ -625,10 +653,19 @@ class Collapser {
       normalize_out(dst(survivors[i]));
     }
     q_[stay] += q_[gone];
+    ++collapses_;
     std::copy(p.x, p.x + 3, &xyz_[3 * stay]);
     if (!plane_.empty()) std::copy(p.xy, p.xy + 2, &plane_[2 * stay]);
+    // note: stay and its neighbours are the vertices whose stars changed (a face, a corner's
+    // position, a quadric): the plans of the edges at them.
+    stamp_[stay] = collapses_;
     around(
-        stay, [&](std::uint32_t e) { area_[e / 3] = face_area(e / 3); }, [](std::uint32_t) {});
+        stay,
+        [&](std::uint32_t e) {
+          area_[e / 3] = face_area(e / 3);
+          stamp_[dst(e)] = collapses_;
+        },
+        [&](std::uint32_t e) { stamp_[src(e)] = collapses_; });
     // New costs for the edges at stay: their quadric and optimum changed.
     // note: the other edges whose star holds a face at stay (between two of its neighbours,
     // and from a neighbour outwards) changed only through the area term. They are not
@@ -664,6 +701,7 @@ class Collapser {
     // comes up, not two per edge at stay: San Gabriel to 10 %, 10-15 % less CPU; the default
     // measure (60 points x 3 sets) on st_helens_crater, zion_canyon and peru_mongon at 10 and
     // 50 % moved by -1.6 % to +0.7 %.
+    full_at_[e] = kNone;
     if (plan(e, p, false)) {
       heap_.set(e, p.cost);
     } else {
@@ -688,6 +726,10 @@ class Collapser {
   std::size_t alive_ = 0;
   IndexedMinHeap heap_;
   std::vector<std::uint32_t> edges_;  // scratch: the edges one collapse updates
+  // Per edge (its queue id) queued at its full cost: the collapses done then, else kNone; per
+  // vertex, the collapses done when its star last changed (run()'s shortcut).
+  std::vector<std::uint32_t> full_at_, stamp_;
+  std::uint32_t collapses_ = 0;
 };
 
 }  // namespace
