@@ -172,9 +172,15 @@ class Collapser {
     // note: with o_.for_ranges, each edge's first cost on its own, maybe on several threads,
     // then queued in edge order: the same queue as in order on this thread.
     // Edge h's first cost into cost; false if it has none (not queued).
+    // note: the quadric's cost alone, a lower bound, as update() queues: an edge's full cost
+    // is walked for when it comes up, and most edges are re-costed by a collapse nearby
+    // before they do. st_helens_full to 10 %: 10 % fewer cycles (cachegrind estimate); the
+    // default measure (60 points x 3 sets) on st_helens_crater, zion_canyon and
+    // peru_mongon at 10, 30, 50 and 70 % (and 4 more DEMs at 10 and 50 %) moved by -3.9 %
+    // to +6.0 % (mean +0.1 %).
     auto first_cost = [&](std::uint32_t h, double& cost) {
       Plan p;
-      if (!first_edge(h) || !plan(h, p)) return false;
+      if (!first_edge(h) || !plan(h, p, false)) return false;
       cost = p.cost;
       return true;
     };
