@@ -47,8 +47,8 @@ std::string par_help() {
        dpts-par --batch LIST|DIR --out-dir OUT [--jobs N] [options]
 
 Simplifies a DEM (a band of any raster GDAL reads) into a TIN that preserves surface
-(geodesic) distances, and writes it as PLY, OBJ, STL or GeoPackage. OUTPUT - is standard output; INPUT - is
-standard input (GDAL's /vsistdin/).
+(geodesic) distances, and writes it as PLY, OBJ, STL or GeoPackage. OUTPUT - is standard
+output; INPUT - is standard input (GDAL's /vsistdin/).
 
   --algo ALGO          qem (default): dpts's quadric edge collapse (triangle quadrics, a
                        cost that sees surface area, the outline's straight runs simplified
@@ -101,10 +101,11 @@ standard input (GDAL's /vsistdin/).
 
 Batch mode: dpts-par --batch LIST|DIR --out-dir OUT [--jobs N] [options]
   simplifies every raster of folder DIR (or every path listed in file LIST, one per line)
-  into OUT/NAME.ply (or the --format's extension) with OUT/NAME.json reports, and writes OUT/batch-summary.json. A failed
-  input is recorded and the batch goes on. Run it again to resume: inputs whose report says
-  ok for the same input (size, modification time) and options are skipped. --jobs N runs N
-  inputs at once, sharing --threads between them. Exit 0 only when every input is done.
+  into OUT/NAME.ply (or the --format's extension) with OUT/NAME.json reports, and writes
+  OUT/batch-summary.json. A failed input is recorded and the batch goes on. Run it again to
+  resume: inputs whose report says ok for the same input (size, modification time) and
+  options are skipped. --jobs N runs N inputs at once, sharing --threads between them.
+  Exit 0 only when every input is done.
 
 Every valid cell centre is a vertex; no-data, NaN, infinite and absurd (beyond +-1e7)
 heights are not, and no face covers a void or leaves the valid data. Heights are the

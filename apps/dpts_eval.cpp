@@ -128,10 +128,11 @@ cell centre.
   --quiet            only the JSON line (or nothing but errors)
   --help, --version
 A mesh given as a triangle soup (each face with its own corners, as STL and GeoPackage hold
-it) is welded first: vertices at identical x, y, z are merged (reported). The run fails (exit 1, one line) when sample points
-lie outside the mesh (or, given, outside the DEM), when pairs connected on T are not on the
-mesh (a mesh in parts or slit: their count), or when an output cannot be written. Pairs not
-connected on T (islands of valid cells) cannot be measured: they are left out and counted.
+it) is welded first: vertices at identical x, y, z are merged (reported). The run fails
+(exit 1, one line) when sample points lie outside the mesh (or, given, outside the DEM), when
+pairs connected on T are not on the mesh (a mesh in parts or slit: their count), or when an
+output cannot be written. Pairs not connected on T (islands of valid cells) cannot be
+measured: they are left out and counted.
 Exit status: 0 ok, 1 failure (bad input, points outside the mesh, a failed write), 2 bad usage.
 )";
 

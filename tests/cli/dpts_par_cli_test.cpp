@@ -336,6 +336,27 @@ TEST_CASE("help and version exit 0 on stdout", "[cli]") {
   CHECK(v.out.rfind("dpts-par 0.1.0", 0) == 0);
 }
 
+TEST_CASE("every tool's --help fits in 100 columns", "[cli]") {
+  std::vector<std::string> tools = {kExe, DPTS_EVAL_EXE};
+#ifdef DPTS_MPI_EXE
+  tools.push_back(DPTS_MPI_EXE);
+#endif
+  for (const auto& tool : tools) {
+    const auto h = test::run(tool, {"--help"});
+    REQUIRE(h.exit_code == 0);
+    REQUIRE(h.out.size() > 1000);
+    std::size_t start = 0, lines = 0;
+    while (start < h.out.size()) {
+      const std::size_t end = std::min(h.out.find('\n', start), h.out.size());
+      INFO(tool << ": " << h.out.substr(start, end - start));
+      CHECK(end - start <= 100);
+      start = end + 1;
+      ++lines;
+    }
+    CHECK(lines > 20);
+  }
+}
+
 TEST_CASE("with stderr closed the output is the same bytes (no progress text in it)",
           "[cli][robust]") {
   test::TempDir dir;
