@@ -208,11 +208,12 @@ TEST_CASE("a batch child killed mid-run leaves no temporary file, and the batch 
   make_folder(dir / "in", 12, 1);
   fs::remove(dir / "in" / "broken.tif");
   // Far more than 3 s of CPU: under a 3 s CPU limit the kernel kills its child (SIGXCPU)
-  // after its temporary output exists.
+  // after its temporary output exists. 9 M cells: about 19 s of CPU in Release on 2026-11-27,
+  // so a kernel several times faster still runs past the limit (1.7 M cells no longer did).
   test::write_geotiff(
       dir / "in" / "big.tif",
       test::make_grid(
-          1300, 1300,
+          3000, 3000,
           [](int c, int r) { return 500.0 + 40.0 * std::sin(c * 0.05) * std::cos(r * 0.07); }),
       {400000, 10, 0, 3800000, 0, -10}, test::epsg_wkt(32611));
   test::RunOptions ro;

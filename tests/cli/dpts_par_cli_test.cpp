@@ -675,6 +675,9 @@ TEST_CASE(
     "[cli][robust]") {
   test::TempDir dir;
   const auto dem = write_long_run_dem(dir / "big.tif", 1300);
+  // qem, the fastest, gets 4 M cells: 3.4 s at 2 threads here (2026-11-27), so its "simplify"
+  // line still comes while it runs on a faster machine (1.7 M cells take 1.6 s).
+  const auto dem_qem = write_long_run_dem(dir / "bigger.tif", 2000);
   const auto out = (dir / "out.ply").string();
   std::ofstream(out) << "precious";  // an older result: must survive the interrupted run
   struct Case {
@@ -694,15 +697,17 @@ TEST_CASE(
     ro.signal_after_s = 30;
     ro.signal = sig;
     const auto report = (dir / "run.json").string();
-    const auto r =
-        test::run(kExe, {"--algo", algo, "--threads", "2", "--report", report, dem, out}, ro);
+    const auto r = test::run(
+        kExe,
+        {"--algo", algo, "--threads", "2", "--report", report, algo == "qem" ? dem_qem : dem, out},
+        ro);
     CHECK(r.exit_code == 1);
     CHECK(io::json_field(test::file_bytes(report), "status") == "interrupted");
     CHECK(r.err.find("dpts-par: interrupted; no output written") != std::string::npos);
     // Promptly: checked between removals and strips (0.2 s measured; sanitizers are slower).
     CHECK(r.seconds_after_signal >= 0);
     CHECK(r.seconds_after_signal < 10);
-    CHECK(dir.files() == std::vector<std::string>{"big.tif", "out.ply", "run.json"});
+    CHECK(dir.files() == std::vector<std::string>{"big.tif", "bigger.tif", "out.ply", "run.json"});
     std::ifstream in(out);
     std::string s;
     std::getline(in, s);
