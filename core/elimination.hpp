@@ -27,6 +27,10 @@ struct EliminationOptions {
   VolumeMethod vp_volume = VolumeMethod::exact;  // exact: no noise, and faster (see README)
   int vp_samples = 100;                          // Monte Carlo points per VP evaluation
   std::uint64_t seed = 1;                        // Monte Carlo seed
+  // Exact VP only: an importance is computed when its vertex could be the next removal, and
+  // until then the queue holds a cheap lower bound of it (core::vp_volume_bound). The
+  // removals, and so the TIN, are the same either way; off only to check that.
+  bool lazy_vp = true;
   // Whether the outline may run straight from cell a to cell b (both on one grid line, the
   // cells between them on the outline). Null: always (the frame is the output CRS up to an
   // affine map). For a reprojected DEM, a straight grid line bends in the output CRS, and the

@@ -174,6 +174,32 @@ double vp_volume_exact(const Star& s, const std::vector<LinkTriangle>& after) {
   return volume;
 }
 
+double vp_volume_bound(const Star& s, const std::vector<LinkTriangle>& after) {
+  // Heights relative to the apex: the difference of the surfaces is the same, and the sums
+  // stay on the scale of the local relief.
+  const double z0 = s.apex.z;
+  const P2 apex{s.apex.x, s.apex.y};
+  double before = 0.0, relief = 0.0;
+  for (std::size_t i = 0; i < fan_count(s); ++i) {
+    const Point3& a = s.link[i];
+    const Point3& b = s.link[(i + 1) % s.n];
+    before += triangle_area(apex, {a.x, a.y}, {b.x, b.y}) * ((a.z - z0) + (b.z - z0));
+  }
+  double after_sum = 0.0, area = 0.0;
+  for (const LinkTriangle& t : after) {
+    const Point3 &p = s.link[t[0]], &q = s.link[t[1]], &r = s.link[t[2]];
+    const double a = triangle_area({p.x, p.y}, {q.x, q.y}, {r.x, r.y});
+    after_sum += a * ((p.z - z0) + (q.z - z0) + (r.z - z0));
+    area += std::fabs(a);
+  }
+  for (std::size_t i = 0; i < s.n; ++i) relief = std::max(relief, std::fabs(s.link[i].z - z0));
+  const double bound = std::fabs(before - after_sum) / 3.0;
+  // The margin: vp_volume_exact works with absolute heights (planes through them), whose
+  // rounding is about 1e-16 x |z| x area a term; 1e-10 is far above it for any stars here.
+  const double margin = 1e-10 * area * (std::fabs(z0) + relief) + 1e-9 * bound;
+  return std::max(0.0, bound - margin);
+}
+
 double vp_volume_monte_carlo(const Star& s, const std::vector<LinkTriangle>& after, int samples,
                              std::uint64_t seed) {
   std::vector<std::array<const Point3*, 3>> before_tris, after_tris;

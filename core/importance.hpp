@@ -35,6 +35,12 @@ using LinkTriangle = std::array<int, 3>;
 // |z_before - z_after| over the polygon. Computed on the overlay of the two triangulations.
 double vp_volume_exact(const Star& star, const std::vector<LinkTriangle>& after);
 
+// A lower bound of vp_volume_exact(star, after) that needs no overlay: |integral of
+// (z_before - z_after)| over the polygon (<= the integral of its absolute value), less a margin
+// for rounding in either computation. Equal to the exact volume, but for that margin, where one
+// surface lies wholly above the other.
+double vp_volume_bound(const Star& star, const std::vector<LinkTriangle>& after);
+
 // VP, the paper's Monte Carlo estimate: `samples` points uniform in the box bounding both
 // surfaces over the link's bounding rectangle; volume = box volume * share of the points that
 // lie between the two surfaces. `seed` fixes the points (deterministic).

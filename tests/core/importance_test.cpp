@@ -92,3 +92,50 @@ TEST_CASE("PLD goes round a link vertex that pokes towards the apex", "[core][im
   CHECK(dpts::core::pld_importance(star) ==
         Approx(1.0 - std::min(ratio02, ratio13)).epsilon(1e-12));
 }
+
+TEST_CASE("VP's lower bound is below the exact volume, and equal where one surface is above",
+          "[core][importance][vp]") {
+  // A pyramid: the fan lies wholly above the refill, so the bound is the volume (less its
+  // rounding margin, a relative 1e-9 here).
+  const auto flat = square_link(0, 0, 0, 0);
+  const Star pyramid{{0, 0, 3.0}, flat.data(), flat.size(), true};
+  CHECK(dpts::core::vp_volume_bound(pyramid, kSplit02) == Approx(2.0).epsilon(1e-8));
+  CHECK(dpts::core::vp_volume_bound(pyramid, kSplit02) <=
+        dpts::core::vp_volume_exact(pyramid, kSplit02));
+  // The case above whose surfaces cross along the link: the refill is wholly above the fan.
+  const auto saddle = square_link(1, -1, 1, -1);
+  const Star crossing{{0, 0, 0}, saddle.data(), saddle.size(), true};
+  CHECK(dpts::core::vp_volume_bound(crossing, kSplit02) == Approx(2.0 / 3.0).epsilon(1e-8));
+  // Random stars of 3 to 12 link vertices at heights far from 0 (rounding margins matter
+  // there), refilled as a fan from link[0]: never above the exact volume.
+  std::uint64_t state = 12345;
+  auto uniform = [&state] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) * 0x1.0p-53;
+  };
+  int tight = 0, loose = 0;
+  for (int k = 0; k < 2000; ++k) {
+    const int n = 3 + k % 10;
+    const double base = 4000.0 * uniform(), relief = k % 3 == 0 ? 1e-3 : 50.0;
+    std::vector<Point3> link;
+    for (int i = 0; i < n; ++i) {
+      // A convex link (angles in order, radii 0.8 to 1.2 of a 30 m cell), so a fan from
+      // link[0] stays inside it.
+      const double a = 2.0 * M_PI * (i + 0.5 * uniform()) / n;
+      const double r = 30.0 * (1.0 + 0.2 * (uniform() - 0.5)) * (i % 2 == 0 ? 1.0 : 0.98);
+      link.push_back({1e5 + r * std::cos(a), 2e5 + r * std::sin(a), base + relief * uniform()});
+    }
+    std::vector<LinkTriangle> fan;
+    for (int i = 1; i + 1 < n; ++i) fan.push_back({0, i, i + 1});
+    const Star star{{1e5, 2e5, base + relief * (uniform() - 0.25)}, link.data(), link.size(), true};
+    const double bound = dpts::core::vp_volume_bound(star, fan);
+    const double exact = dpts::core::vp_volume_exact(star, fan);
+    INFO("star " << k);
+    CHECK(bound >= 0.0);
+    CHECK(bound <= exact);
+    tight += bound >= 0.9 * exact;
+    loose += bound < 0.5 * exact;
+  }
+  CHECK(tight > 200);  // a real bound, not 0
+  CHECK(loose > 200);  // where the surfaces cross inside, below the volume
+}
