@@ -436,15 +436,15 @@ void Eliminator::eliminate(std::size_t keep, const Progress& progress, std::vect
     // the removals come in the same order as with every importance computed at once.
     // note: nearly all such tops sink again (99 % on San Gabriel to 10 %): half the bounds
     // there are within 10 % of the importance, but the keys at the top lie closer than that.
-    if (!m.exact_key[m.heap.top()]) {
-      const std::uint32_t top = m.heap.top();
+    const std::uint32_t top = m.heap.top();
+    if (!m.exact_key[top]) {
       m.exact_key[top] = 1;
       const double importance = m.evaluate(m.handle[top], scratch);
       assert(importance != kLocked && importance >= m.heap.top_key());
       m.heap.set(top, importance);
       continue;
     }
-    const std::uint32_t id = m.heap.pop();
+    const std::uint32_t id = m.heap.pop();  // top
     const VertexHandle v = m.handle[id];
     if (log) log->push_back(m.removal(v, scratch));
     link.clear();

@@ -221,8 +221,9 @@ TEST_CASE("the unsimplified TIN takes the frame's Delaunay diagonal, as grid_tin
   // A reprojected DEM's frame is sheared: Delaunay splits every square along its shorter
   // diagonal, which is NE-SW for one shear and NW-SE for the other (and for a square grid).
   const auto g = hills(20, 16);
-  const double shears[3][2][2] = {
-      {{20.0, 0.4}, {-0.3, -31.0}}, {{20.0, -0.4}, {0.3, -31.0}}, {{30.0, 0.0}, {0.0, -30.0}}};
+  const double shears[3][2][2] = {{{20.0, 0.4}, {-0.3, -31.0}},
+                                  {{20.0, -0.4}, {0.3, -31.0}},
+                                  {{30.0, 0.0}, {0.0, -30.0}}};
   for (const auto& j : shears) {
     const auto frame = core::GridFrame::from_jacobian(j);
     const std::size_t input = core::surface_cells(g).size();
