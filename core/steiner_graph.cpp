@@ -663,7 +663,7 @@ class GeodesicQuery::Anchored {
   }
 
   // The relaxations from settled node u at distance d, its label having come through `tag`.
-  void relax(std::uint32_t u, double d, std::uint32_t tag) {
+  [[gnu::flatten]] void relax(std::uint32_t u, double d, std::uint32_t tag) {
     const double* up = g_.position(u);
     const P3 u3 = pt(up);
     std::uint32_t face = SteinerGraph::kNoFace;  // the face cx_ is set up for
@@ -692,11 +692,15 @@ class GeodesicQuery::Anchored {
   static bool has_anchor(const Anchor& an) { return an.lo <= an.hi; }
   // A window's ends as stored (fractions of the edge, rounded outwards) and back.
   static constexpr double kWindowSteps = 65535.0;
+  // note: the clamped value is in [0, 65535], where truncation is floor: a conversion, not a
+  // call of floor or ceil (no SSE4.1 in the default build), the same values.
   static std::uint16_t window_lo(double f) {
-    return static_cast<std::uint16_t>(std::clamp(std::floor(f * kWindowSteps), 0.0, kWindowSteps));
+    return static_cast<std::uint16_t>(std::clamp(f * kWindowSteps, 0.0, kWindowSteps));
   }
   static std::uint16_t window_hi(double f) {
-    return static_cast<std::uint16_t>(std::clamp(std::ceil(f * kWindowSteps), 0.0, kWindowSteps));
+    const double x = std::clamp(f * kWindowSteps, 0.0, kWindowSteps);
+    const auto t = static_cast<std::uint16_t>(x);
+    return static_cast<std::uint16_t>(t + (t < x));
   }
   static double fraction(std::uint16_t q) { return q / kWindowSteps; }
   // Node v (at v3) gets anchor point a (offsets from v).
@@ -739,7 +743,11 @@ class GeodesicQuery::Anchored {
   std::uint32_t bend_of(std::uint32_t u, double d, double nd) const {
     if (!q_.track_bends_) return LabelHeap::kNone;
     const double per = q_.per_waypoint_;
-    if (per > 0 && std::floor(nd * per) != std::floor(d * per)) return u;
+    // note: floor by conversion (distances are non-negative, and far fewer than 2^63 waypoints
+    // apart): the same test without two calls of floor.
+    if (per > 0 && static_cast<std::int64_t>(nd * per) != static_cast<std::int64_t>(d * per)) {
+      return u;
+    }
     return q_.bend(u);
   }
 
