@@ -212,7 +212,8 @@ bool PathStraightener::unfold(const SurfacePoint& source, const SurfacePoint& ta
   if (hinges_.empty()) hinges_.resize(std::size_t{1} << kHingeBits);
   for (std::size_t j = from; j < strip_.size(); ++j) {
     Hinge& h = hinges_[hinge_slot(strip_[j])];
-    if (h.face != strip_[j] || h.prev != ids) {
+    // note: the corners compared one by one: std::array's != calls memcmp here.
+    if (h.face != strip_[j] || h.prev[0] != ids[0] || h.prev[1] != ids[1] || h.prev[2] != ids[2]) {
       const auto& next = m.faces[strip_[j]];
       // The shared edge (u, w), the previous face's corner off it (k) and the new one (r).
       int k = -1, shared = 0;
@@ -278,12 +279,16 @@ double PathStraightener::funnel(std::size_t from) {
   taut_.resize(kept + 1);
   taut_[0] = portals_[0].l;
   Point2 apex = taut_.back(), left = apex, right = apex;
+  // note: whether left (right) is the apex, kept as a flag: an end is only ever set to a point
+  // other than the apex (the same test as comparing the points, fewer instructions).
+  bool left_free = true, right_free = true;
   std::size_t left_i = kept > 0 ? bends_.back().portal : 0, right_i = left_i;
   std::size_t seen = kept > 0 ? bends_.back().seen : 0;  // the last portal read
   auto bend = [&](Point2 p, std::size_t i, std::uint32_t vertex) {
     taut_.push_back(p);
     bends_.push_back({vertex, i, seen});
     apex = left = right = p;
+    left_free = right_free = true;
     left_i = right_i = i;
   };
   for (std::size_t i = left_i + 1; i < portals_.size(); ++i) {
@@ -291,9 +296,10 @@ double PathStraightener::funnel(std::size_t from) {
     const Portal& p = portals_[i];
     // note: an end at the apex (unconstrained) narrows anything; a new end is checked against
     // the other side unless that one is unconstrained too, or the same point (the target).
-    if (!same(p.r, apex) && (same(apex, right) || cross(apex, right, p.r) >= 0)) {
-      if (same(apex, left) || same(p.r, left) || cross(apex, left, p.r) < 0) {
+    if (!same(p.r, apex) && (right_free || cross(apex, right, p.r) >= 0)) {
+      if (left_free || same(p.r, left) || cross(apex, left, p.r) < 0) {
         right = p.r;
+        right_free = false;
         right_i = i;
       } else {
         // The right side crosses the left one: the path bends at the left end.
@@ -302,9 +308,10 @@ double PathStraightener::funnel(std::size_t from) {
         continue;
       }
     }
-    if (!same(p.l, apex) && (same(apex, left) || cross(apex, left, p.l) <= 0)) {
-      if (same(apex, right) || same(p.l, right) || cross(apex, right, p.l) > 0) {
+    if (!same(p.l, apex) && (left_free || cross(apex, left, p.l) <= 0)) {
+      if (right_free || same(p.l, right) || cross(apex, right, p.l) > 0) {
         left = p.l;
+        left_free = false;
         left_i = i;
       } else {
         bend(right, right_i, portals_[right_i].right);
