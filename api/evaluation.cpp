@@ -152,6 +152,8 @@ std::string Evaluation::json(const EvalRequest& request, int threads, double sec
                                         : "steiner")
       .add("straightened_paths", r.straightened)
       .add("straighten_failed", r.straighten_failed)
+      .add("straighten_passes", r.straighten_passes)
+      .add("reroutes", r.reroutes)
       .add("shortened_pairs", r.shortened)
       .add("pairs_measured", r.pairs_measured)
       .add("pairs_unconnected_dem", r.pairs_unconnected)

@@ -1202,6 +1202,8 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
   result.simplified_one_way = stats_s.one_way_pairs;
   result.straightened = stats_t.straightened + stats_s.straightened;
   result.straighten_failed = stats_t.straighten_failed + stats_s.straighten_failed;
+  result.straighten_passes = stats_t.straighten_passes + stats_s.straighten_passes;
+  result.reroutes = stats_t.reroutes + stats_s.reroutes;
   // note: k queries per set, one per source (a source with no pair to measure settles none).
   if (!options.exact && queries > 0) {
     result.original_searched = stats_t.settled / (queries * result.original_nodes);

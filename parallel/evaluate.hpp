@@ -165,8 +165,9 @@ struct EvalResult {
   std::size_t graphs_bytes = 0, search_bytes = 0, max_searches = 0;
   bool exact = false;  // the geodesics were exact (EvalOptions::exact)
   // Steiner paths straightened (EvalOptions::straighten), on T and on T' together: the paths,
-  // and those that could not be (a degenerate face: their Steiner length kept).
-  std::size_t straightened = 0, straighten_failed = 0;
+  // and those that could not be (a degenerate face: their Steiner length kept); the strips
+  // pulled taut (one per pass) and the vertices rerouted around.
+  std::size_t straightened = 0, straighten_failed = 0, straighten_passes = 0, reroutes = 0;
   // Pair distances shortened along the other mesh's route (shorten_along), T and T' together.
   std::size_t shortened = 0;
   // Pairs, all sets together: measured (in the set errors); not connected on T (a DEM whose
