@@ -27,8 +27,7 @@ for t in "${tools[@]}"; do
   # The libraries (name => path) and the loader (a bare path).
   ldd "$t" | awk '$2 == "=>" && $3 ~ /^\// {print $3} $1 ~ /^\// {print $1}'
 done | sort -u | while read -r lib; do cp -L "$lib" "$tmp/libs/"; done
-loader=$(ldd "$build/dpts-par" | awk '$1 ~ /^\// {print $1}' | head -1)
-loader=$(basename "$loader")
+loader=$(basename "$(ldd "$build/dpts-par" | awk '$1 ~ /^\// {print $1; exit}')")
 cp /usr/share/proj/proj.db "$tmp/share/"
 cp -r /usr/share/gdal "$tmp/share/gdal"
 for dem in "$@"; do cp -L "$dem" "$tmp/dem/"; done

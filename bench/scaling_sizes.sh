@@ -25,39 +25,39 @@ if [[ -n ${FROM_CSV:-} ]]; then
   cores=$(awk -F, 'NR > 1 && $2 > m {m = $2} END {print m}' "$tmp/csv")
   title=${1:-}
 else
-dem=${1:?usage: scaling_sizes.sh DEM [dpts-par options]}
-shift
-runs=${RUNS:-1}
-max=${MAX_THREADS:-$(nproc)}
-cores=$(nproc)
-title="$*"
-mapfile -t threads < <(thread_counts "$max")
-res=$(raster_cell_size "$dem")
-inputs=("$dem")
-for f in 2 4; do
-  gdalwarp -q -r cubic -tr "$(awk -v r="$res" -v f="$f" 'BEGIN {print r / f}')" \
-    "$(awk -v r="$res" -v f="$f" 'BEGIN {print r / f}')" "$dem" "$tmp/x$f.tif"
-  inputs+=("$tmp/x$f.tif")
-done
-
-echo "# $dem and 2 resampled sizes; ${runs} run(s) each; $(nproc) cores; dpts-par $*"
-echo "cells,threads,wall_s,cpu_s,us_per_cell,peak_rss_mb,speedup" | tee "$tmp/csv"
-for input in "${inputs[@]}"; do
-  cells=$(raster_cells "$input")
-  base=
-  : > "$tmp/hashes"
-  for t in "${threads[@]}"; do
-    timed "$build/dpts-par" --quiet --threads "$t" "$@" "$input" "$tmp/out.ply"
-    base=${base:-$wall}
-    timed_row "$cells" "$t" "$cells" "$base" | tee -a "$tmp/csv"
-    sha256sum < "$tmp/out.ply" | cut -c1-16 >> "$tmp/hashes"
+  dem=${1:?usage: scaling_sizes.sh DEM [dpts-par options]}
+  shift
+  runs=${RUNS:-1}
+  max=${MAX_THREADS:-$(nproc)}
+  cores=$(nproc)
+  title="$*"
+  mapfile -t threads < <(thread_counts "$max")
+  res=$(raster_cell_size "$dem")
+  inputs=("$dem")
+  for f in 2 4; do
+    gdalwarp -q -r cubic -tr "$(awk -v r="$res" -v f="$f" 'BEGIN {print r / f}')" \
+      "$(awk -v r="$res" -v f="$f" 'BEGIN {print r / f}')" "$dem" "$tmp/x$f.tif"
+    inputs+=("$tmp/x$f.tif")
   done
-  if [[ $(sort -u "$tmp/hashes" | wc -l) == 1 ]]; then
-    echo "# $cells cells: the same output bytes at every thread count ($(head -1 "$tmp/hashes"))"
-  else
-    echo "# $cells cells: OUTPUTS DIFFER between thread counts: $(tr '\n' ' ' < "$tmp/hashes")"
-  fi
-done
+
+  echo "# $dem and 2 resampled sizes; ${runs} run(s) each; $(nproc) cores; dpts-par $*"
+  echo "cells,threads,wall_s,cpu_s,us_per_cell,peak_rss_mb,speedup" | tee "$tmp/csv"
+  for input in "${inputs[@]}"; do
+    cells=$(raster_cells "$input")
+    base=
+    : > "$tmp/hashes"
+    for t in "${threads[@]}"; do
+      timed "$build/dpts-par" --quiet --threads "$t" "$@" "$input" "$tmp/out.ply"
+      base=${base:-$wall}
+      timed_row "$cells" "$t" "$cells" "$base" | tee -a "$tmp/csv"
+      sha256sum < "$tmp/out.ply" | cut -c1-16 >> "$tmp/hashes"
+    done
+    if [[ $(sort -u "$tmp/hashes" | wc -l) == 1 ]]; then
+      echo "# $cells cells: the same output bytes at every thread count ($(head -1 "$tmp/hashes"))"
+    else
+      echo "# $cells cells: OUTPUTS DIFFER between thread counts: $(tr '\n' ' ' < "$tmp/hashes")"
+    fi
+  done
 fi
 
 if ! command -v gnuplot > /dev/null; then
