@@ -181,8 +181,13 @@ void print_pieces(const dpts::par::MetaStats& stats, bool values) {
                static_cast<double>(stats.peak_rss_before_merge_kb) / 1024.0,
                static_cast<double>(stats.kept_bytes) / (1 << 20));
   std::fprintf(stderr,
-               DPTS_PROG ": stages: count %.2f s, values %.2f s, simplify %.2f s, merge %.2f s\n",
+               DPTS_PROG ": stages: count %.2f s, values %.2f s, simplify %.2f s, merge %.2f s",
                stats.count_s, stats.values_s, stats.simplify_s, stats.merge_s);
+  if (stats.premerge_collapses > 0) {
+    std::fprintf(stderr, " (pre-merge %.2f s, %zu collapses)", stats.premerge_s,
+                 stats.premerge_collapses);
+  }
+  std::fputc('\n', stderr);
 }
 
 // After the method ran: the absurd-heights note, --verbose's piece table or qslim's refusals,

@@ -84,6 +84,11 @@ class IndexedMinHeap {
     return x;
   }
 
+  // Calls fn(key) for every queued entry, in no particular order.
+  template <typename Fn>
+  void for_each_key(Fn&& fn) const {
+    for (const Entry& e : heap_) fn(e.key);
+  }
   std::uint32_t pop() {
     const std::uint32_t id = at(0).id;
     erase(id);

@@ -10,6 +10,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <memory>
 #include <stdexcept>
 #include <utility>
 
@@ -148,6 +150,7 @@ class Collapser {
     for (std::size_t v = 0; v < n; ++v) {
       if (out_[v] == kNone) flags_[v] |= kGone;  // not a corner of any face
       if (!o_.locked.empty() && o_.locked[v]) flags_[v] |= kLocked;
+      if (!o_.frozen.empty() && o_.frozen[v]) flags_[v] |= kFrozen;
       if (out_[v] != kNone && opp_[out_[v]] == kNone) flags_[v] |= kBorder;
     }
     area_.resize(f);
@@ -167,7 +170,10 @@ class Collapser {
 
   std::size_t alive() const { return alive_; }
 
-  void run(std::size_t keep, QemResult& r) {
+  // Every edge's first cost queued (run()'s first step; prepare() may be called before).
+  void prepare() {
+    if (prepared_) return;
+    prepared_ = true;
     heap_ = IndexedMinHeap(fv_.size());
     // note: with o_.for_ranges, each edge's first cost on its own, maybe on several threads,
     // then queued in edge order: the same queue as in order on this thread.
@@ -205,10 +211,25 @@ class Collapser {
     heap_.heapify();
     full_at_.assign(fv_.size(), kNone);
     stamp_.assign(xyz_.size() / 3, 0);
+  }
+
+  // The queued edges' costs (lower bounds of their full costs), appended to out.
+  void queued_costs(std::vector<float>& out) const {
+    heap_.for_each_key([&](double key) { out.push_back(static_cast<float>(key)); });
+  }
+
+  // Collapses in cost order while more than keep vertices are left and the next collapse
+  // costs less than max_cost.
+  void run(std::size_t keep, QemResult& r,
+           double max_cost = std::numeric_limits<double>::infinity()) {
+    prepare();
+    const bool bounded = max_cost < std::numeric_limits<double>::infinity();
     const std::size_t start = alive_;
     const double span = start > keep ? static_cast<double>(start - keep) : 1.0;
     while (alive_ > keep && !heap_.empty()) {
       const double key = heap_.top_key();
+      // note: keys are lower bounds of the full costs.
+      if (bounded && !(key < max_cost)) break;
       const std::uint32_t e = heap_.pop();
       // note: an interior edge queued again at its full cost, whose ends' stars no collapse
       // has touched since, comes up at that same cost: planned without the area term's walk
@@ -223,7 +244,8 @@ class Collapser {
         continue;
       }
       if (same) p.cost = key;
-      if (p.cost > key && !heap_.empty() && p.cost > heap_.top_key()) {
+      if (p.cost > key &&
+          ((!heap_.empty() && p.cost > heap_.top_key()) || (bounded && !(p.cost < max_cost)))) {
         heap_.set(e, p.cost);  // its cost went up since it was queued (see collapse): later
         full_at_[e] = collapses_;
         continue;
@@ -238,6 +260,7 @@ class Collapser {
       }
       collapse(p);
       ++r.collapses;
+      r.last_cost = p.cost;
       if (r.collapses % 4096 == 0 && progress_ &&
           !progress_(static_cast<double>(r.collapses) / span, "simplify")) {
         throw Cancelled();
@@ -280,7 +303,7 @@ class Collapser {
  private:
   // note: kBorder (on the outline) never changes while a vertex lives: the outline's vertices
   // stay on it (or go), and no collapse makes an interior vertex an outline one.
-  static constexpr std::uint8_t kGone = 1, kLocked = 2, kPinched = 4, kBorder = 8;
+  static constexpr std::uint8_t kGone = 1, kLocked = 2, kPinched = 4, kBorder = 8, kFrozen = 16;
 
   // A collapse: half-edge h (a face's, from a to b) and the vertex that goes; the other one
   // stays, moved to x: vertex `at`'s position, or (kNone) an optimum. xy: x in the second
@@ -483,7 +506,7 @@ class Collapser {
   // the area term); false if none.
   bool plan(std::uint32_t h, Plan& p, bool area = true) const {
     const std::uint32_t a = src(h), b = dst(h);
-    if (pinched(a) || pinched(b)) return false;
+    if ((flags_[a] | flags_[b]) & (kPinched | kFrozen)) return false;
     const bool ba = border(a), bb = border(b);
     const bool fixed_a = ba || locked(a), fixed_b = bb || locked(b);
     Quadric q = q_[a];
@@ -736,9 +759,42 @@ class Collapser {
   // vertex, the collapses done when its star last changed (run()'s shortcut).
   std::vector<std::uint32_t> full_at_, stamp_;
   std::uint32_t collapses_ = 0;
+  bool prepared_ = false;
 };
 
 }  // namespace
+
+struct QemCollapse::Impl {
+  Impl(TriMesh&& mesh, QemOptions&& options) : o(std::move(options)), c(std::move(mesh), o, none) {}
+  QemOptions o;
+  const Progress none;  // the collapser keeps references to both
+  Collapser c;
+};
+
+QemCollapse::QemCollapse(TriMesh mesh, QemOptions options)
+    : impl_(std::make_unique<Impl>(std::move(mesh), std::move(options))) {
+  impl_->c.prepare();
+  r_.input_vertices = impl_->c.alive();
+}
+QemCollapse::~QemCollapse() = default;
+QemCollapse::QemCollapse(QemCollapse&&) noexcept = default;
+QemCollapse& QemCollapse::operator=(QemCollapse&&) noexcept = default;
+
+std::size_t QemCollapse::vertices() const { return impl_->c.alive(); }
+
+void QemCollapse::queued_costs(std::vector<float>& out) const { impl_->c.queued_costs(out); }
+
+std::size_t QemCollapse::collapse(std::size_t keep, double max_cost) {
+  const std::size_t before = r_.collapses;
+  impl_->c.run(keep, r_, max_cost);
+  return r_.collapses - before;
+}
+
+QemResult QemCollapse::result() {
+  impl_->c.result(r_);
+  impl_.reset();
+  return std::move(r_);
+}
 
 QemResult qem_simplify(TriMesh mesh, std::size_t keep, QemOptions options,
                        const Progress& progress) {

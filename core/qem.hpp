@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "core/elimination.hpp"
@@ -49,6 +50,10 @@ struct QemOptions {
   // Border edges between two locked vertices get no outline quadric (they are seams, not
   // outline). Empty: none.
   std::vector<char> locked;
+  // Per vertex: frozen vertices never go, never move, and no neighbour collapses onto one
+  // (their quadric may be partial: the piece engine's seams with pieces outside a pre-merge).
+  // Empty: none.
+  std::vector<char> frozen;
   // Per vertex: the starting quadrics (a piece engine's merge carries them on). Empty: each
   // vertex gets the triangle quadrics of its faces and the plane quadrics of its outline edges.
   std::vector<Quadric> quadrics;
@@ -84,6 +89,7 @@ struct QemResult {
   std::vector<double> plane_xy;       // per output vertex: x, y in options.plane_xy's plane
   std::size_t input_vertices = 0, collapses = 0;
   std::size_t refused = 0;  // collapses refused at the top of the queue (fold, topology, bound)
+  double last_cost = 0;     // the last collapse's cost (0: none)
 };
 
 // Simplifies a height-field mesh (faces counter-clockwise seen from above; an edge has at most
@@ -93,5 +99,30 @@ struct QemResult {
 // The mesh and options are taken by value: move them in to save their memory while it runs.
 QemResult qem_simplify(TriMesh mesh, std::size_t keep, QemOptions options = {},
                        const Progress& progress = nullptr);
+
+// qem_simplify in two steps, for a caller that bounds the collapse's cost from several meshes'
+// queues (the piece engine's pre-merge): the mesh prepared with every edge's first cost
+// queued, then collapsed. No progress; the same rules and errors as qem_simplify.
+class QemCollapse {
+ public:
+  QemCollapse(TriMesh mesh, QemOptions options);
+  ~QemCollapse();
+  QemCollapse(QemCollapse&&) noexcept;
+  QemCollapse& operator=(QemCollapse&&) noexcept;
+  // Vertices left (before finish: those of the mesh on some face).
+  std::size_t vertices() const;
+  // The queued edges' costs, lower bounds of what each collapse would cost now, appended.
+  void queued_costs(std::vector<float>& out) const;
+  // Collapses in cost order while more than keep vertices are left and the cheapest collapse
+  // costs less than max_cost; returns how many it made. May be called again.
+  std::size_t collapse(std::size_t keep, double max_cost);
+  // The result, as qem_simplify's (every collapse so far counted). Once, last.
+  QemResult result();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  QemResult r_;
+};
 
 }  // namespace dpts::core

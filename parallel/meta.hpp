@@ -53,6 +53,9 @@ struct MetaStats {
   std::vector<PieceReport> pieces;
   // Wall time per stage.
   double count_s = 0, values_s = 0, simplify_s = 0, merge_s = 0;
+  // qem: the merge's concurrent pre-merge (part of merge_s) and the collapses it made.
+  double premerge_s = 0;
+  std::size_t premerge_collapses = 0;
   // Peak resident memory of the process (Linux VmHWM, kB; 0 elsewhere) just before the merge:
   // what the pieces needed, without the kept-vertex triangulation.
   std::size_t peak_rss_before_merge_kb = 0;

@@ -3,7 +3,9 @@
 #include "core/qem.hpp"
 
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
 
 #include "core/footprint.hpp"
@@ -83,6 +85,57 @@ TEST_CASE("qem never moves or removes a locked vertex", "[core][qem]") {
   const core::MeshCheck mc = core::check_mesh(core::xy_of(r.mesh.xyz), r.mesh.faces);
   CHECK(mc.clockwise_or_flat == 0);
   CHECK(mc.bad_edges == 0);
+}
+
+TEST_CASE("qem never collapses an edge at a frozen vertex", "[core][qem]") {
+  const core::TriMesh in = test::hills_mesh();
+  core::QemOptions options;
+  options.frozen.assign(in.vertex_count(), 0);
+  std::set<std::uint32_t> frozen;
+  for (std::uint32_t v = 0; v < in.vertex_count(); ++v) {
+    if (in.xyz[3 * v] == 20.0) options.frozen[v] = 1, frozen.insert(v);
+  }
+  const core::QemResult r = core::qem_simplify(in, in.vertex_count() / 4, options);
+  // Each frozen vertex is there, unmoved, with its own quadric alone (none collapsed onto it).
+  const core::QemResult none = core::qem_simplify(in, in.vertex_count());
+  std::size_t found = 0;
+  for (std::size_t v = 0; v < r.source.size(); ++v) {
+    if (!frozen.count(r.source[v])) continue;
+    ++found;
+    for (int k = 0; k < 3; ++k) CHECK(r.mesh.xyz[3 * v + k] == in.xyz[3 * r.source[v] + k]);
+    const double above[3] = {in.xyz[3 * r.source[v]], in.xyz[3 * r.source[v] + 1],
+                             in.xyz[3 * r.source[v] + 2] + 1};
+    CHECK(r.quadrics[v](above) == Approx(none.quadrics[r.source[v]](above)));
+  }
+  CHECK(found == frozen.size());
+  CHECK(r.mesh.vertex_count() == in.vertex_count() / 4);
+}
+
+TEST_CASE("qem in two steps: below a cost bound, then on to the count as in one", "[core][qem]") {
+  const core::TriMesh in = test::hills_mesh();
+  const std::size_t keep = in.vertex_count() / 10;
+  const core::QemResult plain = core::qem_simplify(in, keep);
+  core::QemCollapse c(in, {});
+  CHECK(c.vertices() == in.vertex_count());
+  std::vector<float> costs;
+  c.queued_costs(costs);
+  CHECK(costs.size() > in.vertex_count());  // about 3 edges a vertex
+  // The median queued cost bounds a first step: it stops short of the count.
+  std::nth_element(costs.begin(), costs.begin() + costs.size() / 2, costs.end());
+  const double bound = costs[costs.size() / 2];
+  const std::size_t first = c.collapse(keep, bound);
+  CHECK(first > 0);
+  CHECK(c.vertices() > keep);
+  // The plain run's collapses cost as much as the bound by then, not before: the same first
+  // collapses (each under the bound) were made.
+  const std::size_t rest = c.collapse(keep, std::numeric_limits<double>::infinity());
+  CHECK(first + rest == in.vertex_count() - keep);
+  const core::QemResult two = c.result();
+  CHECK(two.collapses == plain.collapses);
+  CHECK(two.input_vertices == in.vertex_count());
+  CHECK(two.mesh.faces == plain.mesh.faces);
+  CHECK(two.mesh.xyz == plain.mesh.xyz);
+  CHECK(two.source == plain.source);
 }
 
 TEST_CASE("qem refuses a triangle the bound refuses, and goes on with the others", "[core][qem]") {

@@ -52,6 +52,7 @@ par::QemEngineOptions options(std::size_t keep, std::size_t merge_bytes = 0) {
   o.levels = 4;
   o.tile_bytes = 64 << 10;
   o.merge_bytes = merge_bytes;
+  o.premerge_vertices = 0;  // the pre-merge, where one group holds all the pieces
   return o;
 }
 
@@ -89,8 +90,11 @@ TEST_CASE("qem's piece engine keeps the count and covers the footprint once acro
     CHECK(groups.back() == pieces.size());
     if (merge_bytes) {
       CHECK(groups.size() == 2);
+      // One group: runs of its pieces collapsed some of the way first, concurrently.
+      CHECK(stats.premerge_collapses > 0);
     } else {
       CHECK(groups.size() > 4);
+      CHECK(stats.premerge_collapses == 0);
     }
     CHECK(m.vertex_count() == keep);
     CHECK(stats.kept_vertices == keep);
