@@ -229,7 +229,7 @@ class Collapser {
     while (alive_ > keep && !heap_.empty()) {
       const double key = heap_.top_key();
       // note: keys are lower bounds of the full costs.
-      if (bounded && !(key < max_cost)) break;
+      if (bounded && !(key <= max_cost)) break;
       const std::uint32_t e = heap_.pop();
       // note: an interior edge queued again at its full cost, whose ends' stars no collapse
       // has touched since, comes up at that same cost: planned without the area term's walk
@@ -245,7 +245,7 @@ class Collapser {
       }
       if (same) p.cost = key;
       if (p.cost > key &&
-          ((!heap_.empty() && p.cost > heap_.top_key()) || (bounded && !(p.cost < max_cost)))) {
+          ((!heap_.empty() && p.cost > heap_.top_key()) || (bounded && !(p.cost <= max_cost)))) {
         heap_.set(e, p.cost);  // its cost went up since it was queued (see collapse): later
         full_at_[e] = collapses_;
         continue;

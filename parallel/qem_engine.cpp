@@ -402,6 +402,9 @@ class QemSweep {
     if (first == 0 && last && !bound_) {
       const auto t0 = std::chrono::steady_clock::now();
       premerge(outputs, pieces);
+      // note: the runs' collapsers were spread over the threads' arenas: handed back before
+      // the merge builds its own.
+      release_free_memory();
       st_.premerge_s = seconds_since(t0);
     }
     stitch(outputs, first, end);
@@ -530,16 +533,21 @@ class QemSweep {
   // The pre-merge (a whole DEM merged as one group), the serial merge's collapses that need
   // not wait for it: runs of kRunPieces consecutive pieces (in k-d order, so mostly
   // neighbours), each stitched at its own seams and collapsed on its own, concurrently, below
-  // one cost bound, with the seams it shares with pieces outside the run frozen (their
-  // quadrics are partial there). The bound: the K-th least cost queued over all runs, K the
-  // collapses left to the target. Costs rise as collapses go on (quadrics add up), so the
-  // merge's last collapse costs more, and a collapse inside a run below the bound is one the
-  // merge would have made too, in the same order among the run's own. kPremergeRounds rounds,
-  // each bound from the queues the round before left: San Gabriel to 10 %, 0.93 then 1.50,
-  // where the merge's last collapse costs 2.04 (20.5k of its 34.3k collapses moved); a third
-  // and fourth round would bound at 1.92 and 2.22, past it. The rest is left to the merge.
+  // one cost bound (at most), with the seams it shares with pieces outside the run frozen
+  // (their quadrics are partial there). The bound: the K-th least cost queued over all runs,
+  // K the collapses left to the target less the frozen vertices. Costs rise as collapses go on
+  // (quadrics add up), so the merge's last collapse costs more, and a collapse inside a run
+  // below the bound is one the merge would have made too, in the same order among the run's
+  // own. kPremergeRounds rounds, each bound from the queues the round before left: San Gabriel
+  // to 10 %, 0.72 then 1.16, where the merge's last collapse costs 2.04 (15.1k of its 34.3k
+  // collapses moved). The rest is left to the merge.
+  // note: the runs' builds and first costs are work the merge then does again: at 2 threads
+  // San Gabriel's merge stage stays about as long (0.16-0.19 s against 0.17-0.20); it pays
+  // where the merge has much to do (olympic_srtm1 to 2 %: 1.51 -> 1.07 s, the flat sea's
+  // collapses in parallel) and with more threads.
   static constexpr std::size_t kRunPieces = 4;
   static constexpr int kPremergeRounds = 2;
+
   void premerge(std::vector<QemPieceMesh>& outputs, const std::vector<core::Piece>& pieces) {
     const std::size_t n = pieces.size(), runs = (n + kRunPieces - 1) / kRunPieces;
     std::size_t vertices = 0;
@@ -549,6 +557,7 @@ class QemSweep {
       QemPieceMesh mesh;  // stitched; the collapse's output
       std::optional<core::QemCollapse> collapse;
       std::size_t keep = 0;
+      std::size_t frozen = 0;  // its vertices shared with other runs
     };
     std::vector<Run> run(runs);
     tbb::parallel_for(std::size_t{0}, runs, [&](std::size_t r) {
@@ -590,6 +599,7 @@ class QemSweep {
       qo.frozen.assign(m.cell.size(), 0);
       for (std::size_t v = 0; v < m.cell.size(); ++v) {
         qo.frozen[v] = m.seam[v] && later_.outside(m.cell[v], from, end);
+        u.frozen += qo.frozen[v] ? 1 : 0;
       }
       // The run's share of the target, at least: the merge goes on from there.
       u.keep = static_cast<std::size_t>(
@@ -603,19 +613,23 @@ class QemSweep {
     });
     for (int round = 0; round < kPremergeRounds; ++round) {
       std::vector<float> costs;
-      std::size_t alive = 0;
+      std::size_t alive = 0, frozen = 0;
       for (const Run& u : run) {
         u.collapse->queued_costs(costs);
         alive += u.collapse->vertices();
+        frozen += u.frozen;
       }
-      if (alive <= st_.target_vertices) break;
-      double bound = std::numeric_limits<double>::infinity();
-      const std::size_t k = alive - st_.target_vertices;
-      if (k < costs.size()) {
-        std::nth_element(costs.begin(), costs.begin() + static_cast<std::ptrdiff_t>(k - 1),
-                         costs.end());
-        bound = costs[k - 1];
-      }
+      // note: the frozen vertices' collapses are queued nowhere yet, and may be the merge's
+      // cheapest (seams across a flat sea cost nothing): each is counted as one the merge
+      // makes for free, so K leaves them out. Without, olympic_srtm1 to 2 % bounded its
+      // second round at 166 where the merge's last collapse cost 0; no bound (K past the
+      // queue) would let each run collapse down to its share (round 7's loss).
+      if (alive <= st_.target_vertices + frozen) break;
+      const std::size_t k = alive - st_.target_vertices - frozen;
+      if (k > costs.size()) break;
+      std::nth_element(costs.begin(), costs.begin() + static_cast<std::ptrdiff_t>(k - 1),
+                       costs.end());
+      const double bound = costs[k - 1];
       costs = {};
       std::atomic<std::size_t> made{0};
       tbb::parallel_for(std::size_t{0}, runs, [&](std::size_t r) {
