@@ -530,6 +530,66 @@ class QemSweep {
     }
   }
 
+  // A run of the pre-merge: its pieces stitched at their own seams, being collapsed.
+  struct Run {
+    QemPieceMesh mesh;  // stitched (cells and seams); the collapse's output
+    std::optional<core::QemCollapse> collapse;
+    std::size_t keep = 0;
+    std::size_t frozen = 0;  // its vertices shared with other runs
+  };
+
+  // Pieces [from, end) (their outputs emptied) stitched into run u, its collapse prepared.
+  void build_run(Run& u, std::vector<QemPieceMesh>& outputs, const std::vector<core::Piece>& pieces,
+                 std::size_t from, std::size_t end) const {
+    QemPieceMesh m;
+    std::unordered_map<std::uint64_t, std::uint32_t> seam_vertex;
+    double vertices = 0;
+    for (std::size_t i = from; i < end; ++i) {
+      vertices += static_cast<double>(pieces[i].vertices);
+      QemPieceMesh& o = outputs[i];
+      std::vector<std::uint32_t> id(o.cell.size());
+      for (std::size_t v = 0; v < o.cell.size(); ++v) {
+        const auto at = static_cast<std::uint32_t>(m.cell.size());
+        if (o.seam[v]) {
+          const auto [it, fresh] = seam_vertex.emplace(o.cell[v], at);
+          id[v] = it->second;
+          if (!fresh) {
+            m.quadrics[it->second] += o.quadrics[v];
+            continue;
+          }
+        } else {
+          id[v] = at;
+        }
+        m.cell.push_back(o.cell[v]);
+        m.seam.push_back(o.seam[v]);
+        m.mesh.xyz.insert(m.mesh.xyz.end(), o.mesh.xyz.begin() + 3 * v,
+                          o.mesh.xyz.begin() + 3 * v + 3);
+        m.quadrics.push_back(o.quadrics[v]);
+        if (positions_.projected) {
+          m.plane_xy.insert(m.plane_xy.end(), o.plane_xy.begin() + 2 * v,
+                            o.plane_xy.begin() + 2 * v + 2);
+        }
+      }
+      for (const auto& t : o.mesh.faces) m.mesh.faces.push_back({id[t[0]], id[t[1]], id[t[2]]});
+      o = {};
+    }
+    core::QemOptions qo;
+    qo.frozen.assign(m.cell.size(), 0);
+    for (std::size_t v = 0; v < m.cell.size(); ++v) {
+      qo.frozen[v] = m.seam[v] && later_.outside(m.cell[v], from, end);
+      u.frozen += qo.frozen[v] ? 1 : 0;
+    }
+    // The run's share of the target, at least: the merge goes on from there.
+    u.keep = static_cast<std::size_t>(
+        std::ceil(static_cast<double>(st_.target_vertices) * vertices / total_));
+    u.mesh.cell = std::move(m.cell);
+    u.mesh.seam = std::move(m.seam);
+    rules(qo, &u.mesh.cell);
+    qo.quadrics = std::move(m.quadrics);
+    qo.plane_xy = std::move(m.plane_xy);
+    u.collapse.emplace(std::move(m.mesh), std::move(qo));
+  }
+
   // The pre-merge (a whole DEM merged as one group), the serial merge's collapses that need
   // not wait for it: runs of kRunPieces consecutive pieces (in k-d order, so mostly
   // neighbours), each stitched at its own seams and collapsed on its own, concurrently, below
@@ -553,63 +613,9 @@ class QemSweep {
     std::size_t vertices = 0;
     for (std::size_t i = 0; i < n; ++i) vertices += outputs[i].cell.size();
     if (runs < 2 || vertices < options_.premerge_vertices) return;
-    struct Run {
-      QemPieceMesh mesh;  // stitched; the collapse's output
-      std::optional<core::QemCollapse> collapse;
-      std::size_t keep = 0;
-      std::size_t frozen = 0;  // its vertices shared with other runs
-    };
     std::vector<Run> run(runs);
     tbb::parallel_for(std::size_t{0}, runs, [&](std::size_t r) {
-      const std::size_t from = r * kRunPieces, end = std::min(n, from + kRunPieces);
-      Run& u = run[r];
-      QemPieceMesh m;
-      std::unordered_map<std::uint64_t, std::uint32_t> seam_vertex;
-      double vertices = 0;
-      for (std::size_t i = from; i < end; ++i) {
-        vertices += static_cast<double>(pieces[i].vertices);
-        QemPieceMesh& o = outputs[i];
-        std::vector<std::uint32_t> id(o.cell.size());
-        for (std::size_t v = 0; v < o.cell.size(); ++v) {
-          const auto at = static_cast<std::uint32_t>(m.cell.size());
-          if (o.seam[v]) {
-            const auto [it, fresh] = seam_vertex.emplace(o.cell[v], at);
-            id[v] = it->second;
-            if (!fresh) {
-              m.quadrics[it->second] += o.quadrics[v];
-              continue;
-            }
-          } else {
-            id[v] = at;
-          }
-          m.cell.push_back(o.cell[v]);
-          m.seam.push_back(o.seam[v]);
-          m.mesh.xyz.insert(m.mesh.xyz.end(), o.mesh.xyz.begin() + 3 * v,
-                            o.mesh.xyz.begin() + 3 * v + 3);
-          m.quadrics.push_back(o.quadrics[v]);
-          if (positions_.projected) {
-            m.plane_xy.insert(m.plane_xy.end(), o.plane_xy.begin() + 2 * v,
-                              o.plane_xy.begin() + 2 * v + 2);
-          }
-        }
-        for (const auto& t : o.mesh.faces) m.mesh.faces.push_back({id[t[0]], id[t[1]], id[t[2]]});
-        o = {};
-      }
-      core::QemOptions qo;
-      qo.frozen.assign(m.cell.size(), 0);
-      for (std::size_t v = 0; v < m.cell.size(); ++v) {
-        qo.frozen[v] = m.seam[v] && later_.outside(m.cell[v], from, end);
-        u.frozen += qo.frozen[v] ? 1 : 0;
-      }
-      // The run's share of the target, at least: the merge goes on from there.
-      u.keep = static_cast<std::size_t>(
-          std::ceil(static_cast<double>(st_.target_vertices) * vertices / total_));
-      u.mesh.cell = std::move(m.cell);
-      u.mesh.seam = std::move(m.seam);
-      rules(qo, &u.mesh.cell);
-      qo.quadrics = std::move(m.quadrics);
-      qo.plane_xy = std::move(m.plane_xy);
-      u.collapse.emplace(std::move(m.mesh), std::move(qo));
+      build_run(run[r], outputs, pieces, r * kRunPieces, std::min(n, (r + 1) * kRunPieces));
     });
     for (int round = 0; round < kPremergeRounds; ++round) {
       std::vector<float> costs;
