@@ -219,7 +219,7 @@ class Collapser {
   }
 
   // Collapses in cost order while more than keep vertices are left and the next collapse
-  // costs less than max_cost.
+  // costs at most max_cost.
   void run(std::size_t keep, QemResult& r,
            double max_cost = std::numeric_limits<double>::infinity()) {
     prepare();
@@ -260,7 +260,6 @@ class Collapser {
       }
       collapse(p);
       ++r.collapses;
-      r.last_cost = p.cost;
       if (r.collapses % 4096 == 0 && progress_ &&
           !progress_(static_cast<double>(r.collapses) / span, "simplify")) {
         throw Cancelled();

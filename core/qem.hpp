@@ -89,7 +89,6 @@ struct QemResult {
   std::vector<double> plane_xy;       // per output vertex: x, y in options.plane_xy's plane
   std::size_t input_vertices = 0, collapses = 0;
   std::size_t refused = 0;  // collapses refused at the top of the queue (fold, topology, bound)
-  double last_cost = 0;     // the last collapse's cost (0: none)
 };
 
 // Simplifies a height-field mesh (faces counter-clockwise seen from above; an edge has at most
@@ -109,12 +108,12 @@ class QemCollapse {
   ~QemCollapse();
   QemCollapse(QemCollapse&&) noexcept;
   QemCollapse& operator=(QemCollapse&&) noexcept;
-  // Vertices left (before finish: those of the mesh on some face).
+  // Vertices left (at first: those of the mesh on some face).
   std::size_t vertices() const;
   // The queued edges' costs, lower bounds of what each collapse would cost now, appended.
   void queued_costs(std::vector<float>& out) const;
   // Collapses in cost order while more than keep vertices are left and the cheapest collapse
-  // costs less than max_cost; returns how many it made. May be called again.
+  // costs at most max_cost; returns how many it made. May be called again.
   std::size_t collapse(std::size_t keep, double max_cost);
   // The result, as qem_simplify's (every collapse so far counted). Once, last.
   QemResult result();
