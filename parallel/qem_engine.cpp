@@ -6,6 +6,7 @@
 #include <tbb/task_group.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -311,6 +312,33 @@ QemPieceMesh simplify_piece(const core::RasterSource& dem, const Positions& posi
   return out;
 }
 
+// Piece output o's vertices appended after `vertices` others, each seam vertex (by cell, in
+// seam_vertex) once, and its faces to `faces`: fresh(v) for each vertex of o that is new,
+// repeat(v, id) for a seam vertex already there as id (whose quadric takes o's).
+template <typename Fresh, typename Repeat>
+void append_stitched(const QemPieceMesh& o,
+                     std::unordered_map<std::uint64_t, std::uint32_t>& seam_vertex,
+                     std::size_t vertices, std::vector<std::array<std::uint32_t, 3>>& faces,
+                     Fresh&& fresh, Repeat&& repeat) {
+  std::vector<std::uint32_t> id(o.cell.size());
+  auto next = static_cast<std::uint32_t>(vertices);
+  for (std::size_t v = 0; v < o.cell.size(); ++v) {
+    if (o.seam[v]) {
+      const auto [it, added] = seam_vertex.emplace(o.cell[v], next);
+      id[v] = it->second;
+      if (!added) {
+        repeat(v, it->second);
+        continue;
+      }
+    } else {
+      id[v] = next;
+    }
+    fresh(v);
+    ++next;
+  }
+  for (const auto& t : o.mesh.faces) faces.push_back({id[t[0]], id[t[1]], id[t[2]]});
+}
+
 double qem_fraction(const MetaStats& st) {
   return static_cast<double>(st.target_vertices) / static_cast<double>(st.input_vertices);
 }
@@ -353,17 +381,7 @@ class LaterWindows {
     }
     return false;
   }
-  bool later(std::uint64_t cell, std::size_t from) const {
-    const std::uint64_t c = cell % width_, r = cell / width_;
-    for (std::uint64_t dr = 0; dr < 2; ++dr) {
-      for (std::uint64_t dc = 0; dc < 2; ++dc) {
-        if (dc > c || dr > r) continue;
-        const std::int64_t o = owner_[((r - dr) / block_) * bx_ + (c - dc) / block_];
-        if (o >= 0 && static_cast<std::size_t>(o) >= from) return true;
-      }
-    }
-    return false;
-  }
+  bool later(std::uint64_t cell, std::size_t from) const { return outside(cell, 0, from); }
 
  private:
   std::uint64_t block_;
@@ -488,32 +506,22 @@ class QemSweep {
     }
     for (std::size_t i = first; i < end; ++i) {
       QemPieceMesh& o = outputs[i];
-      std::vector<std::uint32_t> id(o.cell.size());
-      for (std::size_t v = 0; v < o.cell.size(); ++v) {
-        if (o.seam[v]) {
-          const auto [it, fresh] =
-              seam_vertex.emplace(o.cell[v], static_cast<std::uint32_t>(cell_.size()));
-          id[v] = it->second;
-          if (!fresh) {
-            quadrics_[it->second] += o.quadrics[v];
-            continue;
-          }
-        } else {
-          id[v] = static_cast<std::uint32_t>(cell_.size());
-        }
-        cell_.push_back(o.cell[v]);
-        seam_.push_back(o.seam[v]);
-        out_id_.push_back(kNone);
-        out_xyz_.insert(out_xyz_.end(), 3, 0.0);
-        mesh_.xyz.insert(mesh_.xyz.end(), o.mesh.xyz.begin() + 3 * v,
-                         o.mesh.xyz.begin() + 3 * v + 3);
-        quadrics_.push_back(o.quadrics[v]);
-        if (positions_.projected) {
-          plane_xy_.insert(plane_xy_.end(), o.plane_xy.begin() + 2 * v,
-                           o.plane_xy.begin() + 2 * v + 2);
-        }
-      }
-      for (const auto& t : o.mesh.faces) mesh_.faces.push_back({id[t[0]], id[t[1]], id[t[2]]});
+      append_stitched(
+          o, seam_vertex, cell_.size(), mesh_.faces,
+          [&](std::size_t v) {
+            cell_.push_back(o.cell[v]);
+            seam_.push_back(o.seam[v]);
+            out_id_.push_back(kNone);
+            out_xyz_.insert(out_xyz_.end(), 3, 0.0);
+            mesh_.xyz.insert(mesh_.xyz.end(), o.mesh.xyz.begin() + 3 * v,
+                             o.mesh.xyz.begin() + 3 * v + 3);
+            quadrics_.push_back(o.quadrics[v]);
+            if (positions_.projected) {
+              plane_xy_.insert(plane_xy_.end(), o.plane_xy.begin() + 2 * v,
+                               o.plane_xy.begin() + 2 * v + 2);
+            }
+          },
+          [&](std::size_t v, std::uint32_t at) { quadrics_[at] += o.quadrics[v]; });
       o = {};
     }
   }
@@ -547,30 +555,20 @@ class QemSweep {
     for (std::size_t i = from; i < end; ++i) {
       vertices += static_cast<double>(pieces[i].vertices);
       QemPieceMesh& o = outputs[i];
-      std::vector<std::uint32_t> id(o.cell.size());
-      for (std::size_t v = 0; v < o.cell.size(); ++v) {
-        const auto at = static_cast<std::uint32_t>(m.cell.size());
-        if (o.seam[v]) {
-          const auto [it, fresh] = seam_vertex.emplace(o.cell[v], at);
-          id[v] = it->second;
-          if (!fresh) {
-            m.quadrics[it->second] += o.quadrics[v];
-            continue;
-          }
-        } else {
-          id[v] = at;
-        }
-        m.cell.push_back(o.cell[v]);
-        m.seam.push_back(o.seam[v]);
-        m.mesh.xyz.insert(m.mesh.xyz.end(), o.mesh.xyz.begin() + 3 * v,
-                          o.mesh.xyz.begin() + 3 * v + 3);
-        m.quadrics.push_back(o.quadrics[v]);
-        if (positions_.projected) {
-          m.plane_xy.insert(m.plane_xy.end(), o.plane_xy.begin() + 2 * v,
-                            o.plane_xy.begin() + 2 * v + 2);
-        }
-      }
-      for (const auto& t : o.mesh.faces) m.mesh.faces.push_back({id[t[0]], id[t[1]], id[t[2]]});
+      append_stitched(
+          o, seam_vertex, m.cell.size(), m.mesh.faces,
+          [&](std::size_t v) {
+            m.cell.push_back(o.cell[v]);
+            m.seam.push_back(o.seam[v]);
+            m.mesh.xyz.insert(m.mesh.xyz.end(), o.mesh.xyz.begin() + 3 * v,
+                              o.mesh.xyz.begin() + 3 * v + 3);
+            m.quadrics.push_back(o.quadrics[v]);
+            if (positions_.projected) {
+              m.plane_xy.insert(m.plane_xy.end(), o.plane_xy.begin() + 2 * v,
+                                o.plane_xy.begin() + 2 * v + 2);
+            }
+          },
+          [&](std::size_t v, std::uint32_t at) { m.quadrics[at] += o.quadrics[v]; });
       o = {};
     }
     core::QemOptions qo;
