@@ -370,7 +370,8 @@ double bucket_width(const SteinerGraph& graph) { return graph.min_segment() * (1
 
 }  // namespace
 
-std::size_t BucketQueue::ring_size(const SteinerGraph& graph) {
+template <typename Dist>
+std::size_t BasicBucketQueue<Dist>::ring_size(const SteinerGraph& graph) {
   const double width = bucket_width(graph);
   if (!(width > 0)) return 0;
   const double ring = std::floor(graph.max_segment() / width) + 2;
@@ -382,12 +383,14 @@ std::size_t BucketQueue::ring_size(const SteinerGraph& graph) {
   return size;
 }
 
-BucketQueue::BucketQueue(const SteinerGraph& graph)
+template <typename Dist>
+BasicBucketQueue<Dist>::BasicBucketQueue(const SteinerGraph& graph)
     : per_width_(1 / bucket_width(graph)), ring_(ring_size(graph)), mask_(ring_.size() - 1) {}
 
-void BucketQueue::reset(std::size_t nodes) {
+template <typename Dist>
+void BasicBucketQueue<Dist>::reset(std::size_t nodes) {
   for (auto& b : ring_) b.clear();
-  dist_.assign(nodes, std::numeric_limits<double>::infinity());
+  dist_.assign(nodes, std::numeric_limits<Dist>::infinity());
   pred_.assign(nodes, LabelHeap::kNone);
   bucket_ = 0;
   next_ = 0;
@@ -395,7 +398,8 @@ void BucketQueue::reset(std::size_t nodes) {
   finished_ = false;
 }
 
-bool BucketQueue::pop(Entry& out) {
+template <typename Dist>
+bool BasicBucketQueue<Dist>::pop(Entry& out) {
   while (queued_ > 0) {
     auto& bucket = ring_[bucket_ & mask_];
     if (next_ == bucket.size()) {
@@ -407,7 +411,7 @@ bool BucketQueue::pop(Entry& out) {
     }
     const Entry e = bucket[next_++];
     --queued_;
-    double& l = dist_[e.node];
+    Dist& l = dist_[e.node];
     // note: settled (negative), or lowered since (an older entry). A key is never set twice
     // (each lowering is strictly lower), so one entry matches.
     if (l != e.key) continue;
@@ -418,18 +422,20 @@ bool BucketQueue::pop(Entry& out) {
   return false;
 }
 
-GeodesicQuery::GeodesicQuery(const SteinerGraph& graph, bool use_buckets) : g_(graph) {
-  if (use_buckets && BucketQueue::ring_size(graph) > 0) {
-    buckets_ = std::make_unique<BucketQueue>(graph);
-  }
-}
+template class BasicBucketQueue<double>;
+template class BasicBucketQueue<float>;
+
+GeodesicQuery::GeodesicQuery(const SteinerGraph& graph, bool use_buckets)
+    : g_(graph), use_buckets_(use_buckets && BucketQueue::ring_size(graph) > 0) {}
 
 std::size_t GeodesicQuery::estimate_bytes(std::size_t nodes, std::size_t faces, std::size_t targets,
                                           bool anchored) {
   // note: the buckets hold the queued entries (the search's frontier, far fewer than the
   // nodes); a quarter of an entry per node bounds them on the meshes measured. The heap, for
-  // the graphs that cannot have buckets, holds 16 bytes a node, the buckets' 12 and entries.
-  return (nodes + targets) * 12 + nodes * 4 + faces / 8 + targets * 24 +
+  // the graphs that cannot have buckets, holds 16 bytes a node, the buckets' 12 (8 for the
+  // anchored search's floats) and entries.
+  const std::size_t label = anchored ? 8 : 12;
+  return (nodes + targets) * label + nodes * 4 + faces / 8 + targets * 24 +
          (anchored ? nodes * sizeof(Anchor) : 0);
 }
 
@@ -455,16 +461,21 @@ void GeodesicQuery::search(const SurfacePoint& source, const std::vector<Surface
                            double radius, double shell_from,
                            std::vector<std::pair<std::uint32_t, double>>* shell,
                            std::vector<double>& out, std::size_t required) {
-  if (anchored_) {
-    if (buckets_) {
-      run_anchored(*buckets_, source, targets, radius, shell_from, shell, out, required);
-    } else {
+  if (!use_buckets_) {
+    last_ = kHeap;
+    if (anchored_) {
       run_anchored(heap_, source, targets, radius, shell_from, shell, out, required);
+    } else {
+      run(heap_, source, targets, radius, shell_from, shell, out, required);
     }
-  } else if (buckets_) {
-    run(*buckets_, source, targets, radius, shell_from, shell, out, required);
+  } else if (anchored_) {
+    if (!float_buckets_) float_buckets_ = std::make_unique<FloatBucketQueue>(g_);
+    last_ = kFloatBuckets;
+    run_anchored(*float_buckets_, source, targets, radius, shell_from, shell, out, required);
   } else {
-    run(heap_, source, targets, radius, shell_from, shell, out, required);
+    if (!buckets_) buckets_ = std::make_unique<BucketQueue>(g_);
+    last_ = kBuckets;
+    run(*buckets_, source, targets, radius, shell_from, shell, out, required);
   }
 }
 
@@ -728,6 +739,7 @@ class GeodesicQuery::Anchored {
     an.hi = static_cast<std::uint16_t>(kWindowSteps);
   }
   bool improve(std::uint32_t v, double nd, std::uint32_t via, std::uint32_t from) {
+    nd = Queue::key(nd);
     const double old = queue_.dist(v);
     if (!(nd < old) || queue_.settled_dist(v) < kInf) return false;
     if (old == kInf && v < n_) g_.prefetch(v);
@@ -867,7 +879,7 @@ class GeodesicQuery::Anchored {
     if (!(q_.target_faces_[f >> 6] >> (f & 63) & 1)) return;
     for (std::int32_t j = q_.first_target(f); j >= 0; j = q_.target_next_[j]) {
       const P3 p{targets_[j].x, targets_[j].y, targets_[j].z};
-      const double nd = through(up, d, p);
+      const double nd = Queue::key(through(up, d, p));
       const auto v = static_cast<std::uint32_t>(n_ + j);
       const double old = queue_.dist(v);
       if (nd < old && !q_.target_done_[j]) queue_.decrease(v, nd, SteinerGraph::kAnywhere, from);

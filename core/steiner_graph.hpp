@@ -240,6 +240,8 @@ class LabelHeap {
   };
   // All nodes at infinity, the heap empty.
   void reset(std::size_t nodes);
+  // The label a distance gets (kept as is).
+  static double key(double d) { return d; }
   double dist(std::uint32_t node) const { return label_[node].dist; }
   // The node's distance if it was popped, else infinity.
   double settled_dist(std::uint32_t node) const {
@@ -282,27 +284,35 @@ class LabelHeap {
 // Each lowering queues an entry (key, node, tag); the node's older entries are skipped when
 // popped (their key is no longer its distance). The buckets live in a ring that spans the
 // longest edge, which bounds the spread of the queued distances.
-class BucketQueue {
+// Dist: how a node's distance is kept, double, or float for the anchored search (8 bytes a node
+// less; its distances stand for paths that are pulled taut after, so only the order of near
+// ties within a float's rounding, 6e-8 of the distance, can move).
+template <typename Dist>
+class BasicBucketQueue {
  public:
   using Entry = LabelHeap::Entry;
   // The number of buckets a graph needs, 0 if they are not worth it (degenerate faces, or a
   // longest edge too many times the shortest).
   static std::size_t ring_size(const SteinerGraph& graph);
-  explicit BucketQueue(const SteinerGraph& graph);
+  explicit BasicBucketQueue(const SteinerGraph& graph);
   void reset(std::size_t nodes);
+  // The label a distance gets: rounded as kept. Relaxations compare their candidates rounded,
+  // so that each lowering of a node is strictly lower.
+  static double key(double d) { return static_cast<Dist>(d); }
   // The node's tentative distance; below zero once settled, so no relaxation improves it.
   double dist(std::uint32_t node) const { return dist_[node]; }
   double settled_dist(std::uint32_t node) const {
     const double l = dist_[node];
     return std::signbit(l) ? -l : std::numeric_limits<double>::infinity();
   }
+  // key: as key() gives it.
   void decrease(std::uint32_t node, double key, std::uint32_t tag, std::uint32_t pred) {
     // note: b >= bucket_ (a distance never falls below the bucket being emptied: its nodes are
     // at least one width from the others) but for rounding, which the max guards against; and
     // b < bucket_ + ring size (no edge is longer than max_segment()). The width's margin covers
     // the rounding of multiplying by its inverse.
     const std::uint64_t b = bucket_of(key);
-    dist_[node] = key;
+    dist_[node] = static_cast<Dist>(key);
     pred_[node] = pred;
     ring_[b & mask_].push_back({key, node, tag});
     ++queued_;
@@ -310,9 +320,17 @@ class BucketQueue {
   // A node of the lowest bucket with its distance and tag into out, marked settled; false when
   // none is left.
   bool pop(Entry& out);
+  // note: past the current bucket, from the next ones (those of a search on a fine graph hold
+  // a few entries each): their entries may still be lowered or skipped, a hint all the same.
   std::uint32_t next_hint(std::size_t ahead) const {
-    const auto& b = ring_[bucket_ & mask_];
-    return next_ + ahead < b.size() ? b[next_ + ahead].node : LabelHeap::kNone;
+    std::size_t i = next_ + ahead;
+    const std::uint64_t last = bucket_ + std::min<std::uint64_t>(kHintBuckets, mask_);
+    for (std::uint64_t b = bucket_; b <= last; ++b) {
+      const auto& q = ring_[b & mask_];
+      if (i < q.size()) return q[i].node;
+      i -= q.size();
+    }
+    return LabelHeap::kNone;
   }
   void prefetch_label(std::uint32_t node) const {
     __builtin_prefetch(&dist_[node]);
@@ -328,21 +346,24 @@ class BucketQueue {
 
  private:
   // note: a settled node's distance is negated. The tag rides in the queued entries, so a
-  // node holds 12 bytes (its distance and the node it came from), not 16.
+  // node holds 12 bytes (its distance and the node it came from), not 16; 8 with floats.
   // The bucket a distance goes into: never one already emptied.
   std::uint64_t bucket_of(double key) const {
     return std::max(static_cast<std::uint64_t>(key * per_width_), bucket_);
   }
+  static constexpr std::uint64_t kHintBuckets = 3;  // buckets next_hint looks into past this
   double per_width_;  // 1 / bucket width
   std::vector<std::vector<Entry>> ring_;
   std::uint64_t mask_;  // ring size - 1
-  HugeVector<double> dist_;
+  HugeVector<Dist> dist_;
   HugeVector<std::uint32_t> pred_;
   std::uint64_t bucket_ = 0;  // the bucket being emptied
   std::size_t next_ = 0;      // its next entry
   std::size_t queued_ = 0;    // entries in the ring, skipped ones included
   bool finished_ = false;
 };
+using BucketQueue = BasicBucketQueue<double>;
+using FloatBucketQueue = BasicBucketQueue<float>;
 
 // Dijkstra on a SteinerGraph from one surface point to many. Holds per-query scratch memory:
 // one per thread; the graph is shared read-only.
@@ -353,8 +374,8 @@ class GeodesicQuery {
   explicit GeodesicQuery(const SteinerGraph& graph, bool use_buckets = true);
 
   // The memory (bytes) of one query on a graph of `nodes` nodes over `faces` faces with
-  // `targets` targets: its labels (12 bytes per node and target), a bit per face and the
-  // targets' lists by face, and the queue's buckets.
+  // `targets` targets: its labels (12 bytes per node and target, 8 anchored), a bit per face
+  // and the targets' lists by face, and the queue's buckets.
   // An anchored query (set_anchored) needs sizeof(Anchor) more per Steiner node (counted here
   // per node).
   static std::size_t estimate_bytes(std::size_t nodes, std::size_t faces, std::size_t targets,
@@ -378,7 +399,9 @@ class GeodesicQuery {
   // A graph node's distance from the last query's source if that query settled it, else
   // infinity.
   double settled_distance(std::uint32_t node) const {
-    return buckets_ ? buckets_->settled_dist(node) : heap_.settled_dist(node);
+    return last_ == kBuckets        ? buckets_->settled_dist(node)
+           : last_ == kFloatBuckets ? float_buckets_->settled_dist(node)
+                                    : heap_.settled_dist(node);
   }
 
   // The graph nodes of the shortest Steiner path the last query found from its source to its
@@ -389,7 +412,9 @@ class GeodesicQuery {
   void path(std::size_t target, std::vector<std::uint32_t>& nodes) const;
   // The node a graph node's distance came from in the last query (LabelHeap::kNone: the source).
   std::uint32_t pred(std::uint32_t node) const {
-    return buckets_ ? buckets_->pred(node) : heap_.pred(node);
+    return last_ == kBuckets        ? buckets_->pred(node)
+           : last_ == kFloatBuckets ? float_buckets_->pred(node)
+                                    : heap_.pred(node);
   }
   // The same for a graph node the last query settled: the path's nodes, `node` last.
   void path_to_node(std::uint32_t node, std::vector<std::uint32_t>& nodes) const;
@@ -420,7 +445,7 @@ class GeodesicQuery {
   std::size_t settled() const { return settled_; }
 
   // Whether the queries use Dial's buckets (else the heap); same distances up to rounding.
-  bool uses_buckets() const { return buckets_ != nullptr; }
+  bool uses_buckets() const { return use_buckets_; }
 
  private:
   // explore(), or distances() with an infinite radius and no shell, on the graph's queue.
@@ -462,7 +487,12 @@ class GeodesicQuery {
            std::vector<double>& out, std::size_t required);
   const SteinerGraph& g_;
   LabelHeap heap_;
+  // The plain search's buckets, and the anchored search's (floats): each made when first used,
+  // where the graph allows buckets.
+  bool use_buckets_ = false;
   std::unique_ptr<BucketQueue> buckets_;
+  std::unique_ptr<FloatBucketQueue> float_buckets_;
+  enum { kHeap, kBuckets, kFloatBuckets } last_ = kHeap;  // the queue of the last search
   // (face, its list's head) for each face with a target, by face: a few entries, where an
   // array over the faces would take 4 bytes a face per search.
   std::vector<std::pair<std::uint32_t, std::int32_t>> face_heads_;
