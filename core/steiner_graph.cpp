@@ -432,10 +432,9 @@ std::size_t GeodesicQuery::estimate_bytes(std::size_t nodes, std::size_t faces, 
                                           bool anchored) {
   // note: the buckets hold the queued entries (the search's frontier, far fewer than the
   // nodes); a quarter of an entry per node bounds them on the meshes measured. The heap, for
-  // the graphs that cannot have buckets, holds 16 bytes a node, the buckets' 12 (8 for the
-  // anchored search's floats) and entries.
-  const std::size_t label = anchored ? 8 : 12;
-  return (nodes + targets) * label + nodes * 4 + faces / 8 + targets * 24 +
+  // the graphs that cannot have buckets (not known before the graph is built), holds 16 bytes
+  // a node, the buckets' 12 (8 for the anchored search's floats) and entries: 16 bounds both.
+  return (nodes + targets) * 12 + nodes * 4 + faces / 8 + targets * 24 +
          (anchored ? nodes * sizeof(Anchor) : 0);
 }
 

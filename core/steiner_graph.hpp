@@ -374,8 +374,9 @@ class GeodesicQuery {
   explicit GeodesicQuery(const SteinerGraph& graph, bool use_buckets = true);
 
   // The memory (bytes) of one query on a graph of `nodes` nodes over `faces` faces with
-  // `targets` targets: its labels (12 bytes per node and target, 8 anchored), a bit per face
-  // and the targets' lists by face, and the queue's buckets.
+  // `targets` targets: its labels (12 bytes per node and target; 8 anchored on buckets, counted
+  // as 12 since a heap may take their place), a bit per face and the targets' lists by face,
+  // and the queue's buckets.
   // An anchored query (set_anchored) needs sizeof(Anchor) more per Steiner node (counted here
   // per node).
   static std::size_t estimate_bytes(std::size_t nodes, std::size_t faces, std::size_t targets,
