@@ -1,5 +1,7 @@
 // BM_dijkstra_one_source: one Dijkstra query (1 source -> 99 targets) on the Steiner graph of a
 // 1000 x 1000-cell crop (1M cells) of the Pyrenees SRTM tile, at the default delta.
+// BM_straighten_paths: the paths of one anchored search (1 source -> 99 targets, dpts-eval's
+// default delta on T) pulled taut (PathStraightener::shortest, as dpts-eval does per pair).
 #include <benchmark/benchmark.h>
 #include <cpl_conv.h>
 #include <gdal_priv.h>
@@ -8,6 +10,7 @@
 #include <memory>
 #include <string>
 
+#include "core/geodesic_path.hpp"
 #include "core/steiner_graph.hpp"
 #include "core/surface_sampling.hpp"
 #include "io/dem_reader.hpp"
@@ -20,6 +23,7 @@ const std::string kDem = std::string(DPTS_SHARED_DATA_DIR) + "/pyrenees_srtm3_n4
 struct Setup {
   dpts::core::TriMesh mesh;
   std::unique_ptr<dpts::core::SteinerGraph> graph;
+  std::unique_ptr<dpts::core::SteinerGraph> straightened;  // at dpts-eval's delta on T
   std::vector<dpts::core::SurfacePoint> points;
 };
 
@@ -46,6 +50,9 @@ const Setup* setup() {
       dpts::core::fix_orientation(out->mesh);
       const double delta = dpts::par::kDefaultDeltaFactor * dpts::core::mean_edge_length(out->mesh);
       out->graph = std::make_unique<dpts::core::SteinerGraph>(out->mesh, delta);
+      out->straightened = std::make_unique<dpts::core::SteinerGraph>(
+          out->mesh,
+          dpts::par::kStraightenedDeltaFactorDem * dpts::core::mean_edge_length(out->mesh));
       out->points = dpts::core::sample_uniform(out->mesh, 100, 1);
       return out;
     } catch (const std::exception&) {
@@ -77,5 +84,34 @@ void BM_dijkstra_one_source(benchmark::State& state) {
       benchmark::Counter(nodes * state.iterations(), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_dijkstra_one_source)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+void BM_straighten_paths(benchmark::State& state) {
+  const Setup* s = setup();
+  if (!s) {
+    state.SkipWithError(("cannot read " + kDem).c_str());
+    return;
+  }
+  dpts::core::GeodesicQuery query(*s->straightened);
+  query.set_anchored(true);
+  const std::vector<dpts::core::SurfacePoint> targets(s->points.begin() + 1, s->points.end());
+  std::vector<double> d;
+  query.distances(s->points[0], targets, d);
+  dpts::core::PathStraightener straightener(*s->straightened);
+  double sum = 0;
+  for (auto _ : state) {
+    sum = 0;
+    for (std::size_t j = 0; j < targets.size(); ++j) {
+      sum += straightener.shortest(query, s->points[0], j, targets[j], d[j]);
+    }
+    benchmark::DoNotOptimize(sum);
+  }
+  const auto& st = straightener.stats();
+  const double runs = static_cast<double>(state.iterations());
+  state.counters["paths"] = static_cast<double>(st.paths) / runs;
+  state.counters["passes"] = static_cast<double>(st.passes) / runs;
+  state.counters["reroutes"] = static_cast<double>(st.reroutes) / runs;
+  state.counters["mean_m"] = sum / static_cast<double>(targets.size());
+}
+BENCHMARK(BM_straighten_paths)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
 }  // namespace

@@ -12,7 +12,7 @@ namespace {
 constexpr std::uint32_t kNoVertex = 0xFFFFFFFFu;
 constexpr double kPi = 3.14159265358979323846;
 // Most faces around one vertex a walk visits (a fan larger than this is treated as open).
-constexpr int kMaxFan = 4096;
+constexpr int kMaxFan = SteinerGraph::kMaxFan;
 // Most passes of pulling taut and rerouting for one path (each pass strictly shortens it).
 constexpr int kMaxPasses = 256;
 // shortest(): how many nodes back from the target's face another path is followed to see
@@ -81,6 +81,9 @@ std::uint32_t third(const TriMesh& m, std::uint32_t f, std::uint32_t v, std::uin
 }  // namespace
 
 double PathStraightener::total_angle(std::uint32_t v, std::uint32_t f) const {
+  // note: kept by the graph where v's faces are one fan (the same walk from its first face).
+  const double kept = g_.vertex_angle(v);
+  if (!std::isnan(kept)) return kept;
   // Around v from f, across the edge to one of f's other corners, until back at f.
   double sum = corner_angle(f, v);
   std::uint32_t cur = f, x = third(g_.mesh(), f, v, kNoVertex);

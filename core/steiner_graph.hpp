@@ -126,6 +126,12 @@ class SteinerGraph {
     const Edge& e = edges_[edge_of(node)];
     return e.sides[0].face == f ? e.sides[0].opposite : e.sides[1].opposite;
   }
+  // The sum of vertex v's corner angles where its faces form one closed fan (at most kMaxFan
+  // faces); -1 on the outline; NaN where its faces form several fans, or more (a caller walks
+  // round from a face of its own then).
+  double vertex_angle(std::uint32_t v) const { return vertex_angle_[v]; }
+  // Most faces round one vertex whose total angle is kept.
+  static constexpr int kMaxFan = 4096;
   // Calls fn(f) for each face around vertex v (in no particular order).
   template <typename Fn>
   void for_each_face_of_vertex(std::uint32_t v, Fn&& fn) const {
@@ -191,6 +197,7 @@ class SteinerGraph {
   void link_edges();
   void bound_segments();
   void build_corners();
+  void build_angles();
 
   const TriMesh& mesh_;
   double delta_;
@@ -226,6 +233,7 @@ class SteinerGraph {
   HugeVector<Edge> edges_;
   std::vector<std::uint32_t> corner_first_;  // CSR vertex -> corners_
   HugeVector<Corner> corners_;
+  std::vector<double> vertex_angle_;  // per vertex: vertex_angle()
 };
 
 // Dijkstra's tentative distances with an indexed 4-ary min-heap over them (decrease-key: each

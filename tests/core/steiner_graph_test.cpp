@@ -265,3 +265,56 @@ TEST_CASE("PointLocator copes with flat and thin meshes and far points", "[stein
   CHECK_FALSE(sliver.locate(10.0, 1e6, 1.0).has_value());
   CHECK(sliver.locate(10.0, 1.5, 1.0).has_value());
 }
+
+TEST_CASE("a vertex's total angle: its corners' sum in one closed fan, -1 on the outline",
+          "[core][geodesic]") {
+  constexpr double kPi = 3.14159265358979323846;
+  SECTION("a 16-sided pyramid: the apex's angle is 16 times its faces' angle") {
+    const int n = 16;
+    const double radius = 100, height = 70;
+    core::TriMesh m;
+    m.xyz = {0, 0, height};
+    for (int i = 0; i < n; ++i) {
+      m.xyz.insert(m.xyz.end(),
+                   {radius * std::cos(2 * kPi * i / n), radius * std::sin(2 * kPi * i / n), 0});
+    }
+    for (std::uint32_t i = 0; i < n; ++i) m.faces.push_back({0, 1 + i, 1 + (i + 1) % n});
+    const core::SteinerGraph g(m, 20.0);
+    const double slant = std::hypot(radius, height);
+    const double beta = 2 * std::asin(radius * std::sin(kPi / n) / slant);
+    CHECK(g.vertex_angle(0) == Approx(n * beta).epsilon(1e-12));
+    CHECK(g.vertex_angle(0) < 2 * kPi);
+    for (std::uint32_t v = 1; v <= n; ++v) CHECK(g.vertex_angle(v) == -1);
+  }
+  SECTION("a plane's interior vertices: 2 pi; its outline's: -1") {
+    const auto m = grid_mesh(5, 4, 10.0, [](int c, int r) { return 3.0 * c - 2.0 * r; });
+    const core::SteinerGraph g(m, 5.0);
+    for (std::uint32_t v = 0; v < m.vertex_count(); ++v) {
+      const std::uint32_t c = v % 5, r = v / 5;
+      const bool outline = c == 0 || c == 4 || r == 0 || r == 3;
+      CAPTURE(v);
+      if (outline) {
+        CHECK(g.vertex_angle(v) == -1);
+      } else {
+        CHECK(g.vertex_angle(v) == Approx(2 * kPi).epsilon(1e-12));
+      }
+    }
+  }
+  SECTION("two fans meeting at a vertex: none kept (the caller walks its own)") {
+    // Two square cones of four faces each, apex to apex at vertex 0 (a double cone): each
+    // fan is closed, and neither holds all of vertex 0's faces.
+    core::TriMesh m;
+    m.xyz = {0, 0, 0};
+    for (int k = 0; k < 2; ++k) {
+      const double z = k == 0 ? 10 : -10;
+      for (int i = 0; i < 4; ++i) {
+        m.xyz.insert(m.xyz.end(), {10 * std::cos(kPi * i / 2), 10 * std::sin(kPi * i / 2), z});
+      }
+    }
+    for (std::uint32_t i = 0; i < 4; ++i) m.faces.push_back({0, 1 + i, 1 + (i + 1) % 4});
+    for (std::uint32_t i = 0; i < 4; ++i) m.faces.push_back({0, 5 + (i + 1) % 4, 5 + i});
+    const core::SteinerGraph g(m, 5.0);
+    CHECK(std::isnan(g.vertex_angle(0)));
+    CHECK(g.vertex_angle(1) == -1);
+  }
+}
