@@ -32,6 +32,9 @@ class IndexedMinHeap {
     heapify();
   }
 
+  // Room for n entries (push_unordered's), so that the heap is not copied as it grows.
+  void reserve(std::size_t n) { heap_.reserve(n); }
+
   // Appends (id, key) without ordering (id must be absent); heapify() then orders all at
   // once, in O(n), with no temporary arrays.
   void push_unordered(std::uint32_t id, double key) {
