@@ -48,54 +48,13 @@ bool PathStraightener::contains(std::uint32_t f, std::uint32_t v) const {
   return face[0] == v || face[1] == v || face[2] == v;
 }
 
-double PathStraightener::corner_angle(std::uint32_t f, std::uint32_t v) const {
-  const auto& face = g_.mesh().faces[f];
-  const int i = face[0] == v ? 0 : face[1] == v ? 1 : 2;
-  const Vec3 p = at(g_.mesh(), v);
-  const Vec3 a = sub(at(g_.mesh(), face[(i + 1) % 3]), p);
-  const Vec3 b = sub(at(g_.mesh(), face[(i + 2) % 3]), p);
-  return std::atan2(cross_norm(a, b), dot(a, b));
-}
-
-namespace {
-
-// The face across f's edge (v, x), kNoFace on the outline.
-std::uint32_t across_edge(const SteinerGraph& g, std::uint32_t f, std::uint32_t v,
-                          std::uint32_t x) {
-  const auto& face = g.mesh().faces[f];
-  for (int i = 0; i < 3; ++i) {
-    const std::uint32_t a = face[i], b = face[(i + 1) % 3];
-    if ((a == v && b == x) || (a == x && b == v)) return g.across(f, i);
-  }
-  return SteinerGraph::kNoFace;
-}
-
-// The corner of face f that is neither v nor x.
-std::uint32_t third(const TriMesh& m, std::uint32_t f, std::uint32_t v, std::uint32_t x) {
-  for (std::uint32_t c : m.faces[f]) {
-    if (c != v && c != x) return c;
-  }
-  return kNoVertex;
-}
-
-}  // namespace
-
 double PathStraightener::total_angle(std::uint32_t v, std::uint32_t f) const {
   // note: kept by the graph where v's faces are one fan (the same walk from its first face).
   const double kept = g_.vertex_angle(v);
   if (!std::isnan(kept)) return kept;
   // Around v from f, across the edge to one of f's other corners, until back at f.
-  double sum = corner_angle(f, v);
-  std::uint32_t cur = f, x = third(g_.mesh(), f, v, kNoVertex);
-  for (int step = 0; step < kMaxFan; ++step) {
-    const std::uint32_t next = across_edge(g_, cur, v, x);
-    if (next == SteinerGraph::kNoFace) return -1;  // v is on the outline
-    if (next == f) return sum;
-    sum += corner_angle(next, v);
-    x = third(g_.mesh(), next, v, x);
-    cur = next;
-  }
-  return -1;
+  const auto fan = g_.walk_fan(v, f, g_.third_corner(f, v, kNoVertex));
+  return fan.closed ? fan.angle : -1;
 }
 
 bool PathStraightener::walk_around(std::uint32_t v, std::uint32_t from, std::uint32_t to,
@@ -106,11 +65,11 @@ bool PathStraightener::walk_around(std::uint32_t v, std::uint32_t from, std::uin
     out.clear();
     std::uint32_t cur = from;
     for (int step = 0; step < kMaxFan; ++step) {
-      const std::uint32_t next = across_edge(g_, cur, v, x);
+      const std::uint32_t next = g_.across_edge(cur, v, x);
       if (next == SteinerGraph::kNoFace || next == from) return false;
       if (next == to) return true;
       out.push_back(next);
-      x = third(g_.mesh(), next, v, x);
+      x = g_.third_corner(next, v, x);
       cur = next;
     }
     return false;
@@ -120,7 +79,7 @@ bool PathStraightener::walk_around(std::uint32_t v, std::uint32_t from, std::uin
   const std::uint32_t x0 = face[(i + 1) % 3], x1 = face[(i + 2) % 3];
   if (!shortest) {
     // The direction whose first face is not `avoid`.
-    return walk(across_edge(g_, from, v, x0) == avoid ? x1 : x0, fan);
+    return walk(g_.across_edge(from, v, x0) == avoid ? x1 : x0, fan);
   }
   std::vector<std::uint32_t> other;
   const bool ok0 = walk(x0, fan), ok1 = walk(x1, other);
@@ -348,7 +307,7 @@ double PathStraightener::inside_angle(const Bend& b, std::size_t first, std::siz
   };
   const Point2 in{prev.x - v.x, prev.y - v.y}, out{next.x - v.x, next.y - v.y};
   double sum = angle(in, other_end(first + 1)) + angle(other_end(last), out);
-  for (std::size_t j = first + 1; j < last; ++j) sum += corner_angle(strip_[j], b.vertex);
+  for (std::size_t j = first + 1; j < last; ++j) sum += g_.corner_angle(strip_[j], b.vertex);
   return sum;
 }
 

@@ -106,7 +106,6 @@ class PathStraightener {
   // `from` are kept from the last call (0: none).
   double funnel(std::size_t from);
   bool contains(std::uint32_t f, std::uint32_t v) const;
-  double corner_angle(std::uint32_t f, std::uint32_t v) const;
   double total_angle(std::uint32_t v, std::uint32_t f) const;
   double inside_angle(const Bend& b, std::size_t first, std::size_t last, Point2 prev,
                       Point2 next) const;

@@ -264,80 +264,72 @@ void SteinerGraph::build_corners() {
   }
 }
 
+double SteinerGraph::corner_angle(std::uint32_t f, std::uint32_t v) const {
+  const auto& face = mesh_.faces[f];
+  const int i = face[0] == v ? 0 : face[1] == v ? 1 : 2;
+  const double* p = &mesh_.xyz[3 * v];
+  const double* a = &mesh_.xyz[3 * face[(i + 1) % 3]];
+  const double* b = &mesh_.xyz[3 * face[(i + 2) % 3]];
+  const double u[3] = {a[0] - p[0], a[1] - p[1], a[2] - p[2]};
+  const double w[3] = {b[0] - p[0], b[1] - p[1], b[2] - p[2]};
+  const double c[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                       u[0] * w[1] - u[1] * w[0]};
+  return std::atan2(std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]),
+                    u[0] * w[0] + u[1] * w[1] + u[2] * w[2]);
+}
+
+std::uint32_t SteinerGraph::across_edge(std::uint32_t f, std::uint32_t v, std::uint32_t x) const {
+  const auto& face = mesh_.faces[f];
+  for (int i = 0; i < 3; ++i) {
+    const std::uint32_t a = face[i], b = face[(i + 1) % 3];
+    if ((a == v && b == x) || (a == x && b == v)) return across(f, i);
+  }
+  return kNoFace;
+}
+
+SteinerGraph::Fan SteinerGraph::walk_fan(std::uint32_t v, std::uint32_t f, std::uint32_t x) const {
+  Fan fan;
+  fan.angle = corner_angle(f, v);
+  fan.faces = 1;
+  std::uint32_t cur = f;
+  for (int step = 0; step < kMaxFan; ++step) {
+    const std::uint32_t next = across_edge(cur, v, x);
+    if (next == kNoFace) return fan;
+    if (next == f) {
+      fan.closed = true;
+      return fan;
+    }
+    fan.angle += corner_angle(next, v);
+    ++fan.faces;
+    x = third_corner(next, v, x);
+    cur = next;
+  }
+  return fan;
+}
+
 // Each vertex's total angle, walked round its fan from its first corner's face as
-// PathStraightener walked it from a face of its path (across the edge to the face's next
-// corner), so that the straightener reads it instead of walking each time (its atan2 calls were
-// 3 % of dpts-eval's time on San Gabriel).
+// PathStraightener walked it from a face of its path, so that the straightener reads it
+// instead of walking for each bend (its atan2 calls were 3 % of dpts-eval's time on San
+// Gabriel).
 void SteinerGraph::build_angles() {
-  const TriMesh& mesh = mesh_;
-  const std::size_t nv = mesh.vertex_count();
+  const std::size_t nv = mesh_.vertex_count();
   vertex_angle_.assign(nv, std::numeric_limits<double>::quiet_NaN());
-  auto corner_angle = [&](std::uint32_t f, std::uint32_t v) {
-    const auto& face = mesh.faces[f];
-    const int i = face[0] == v ? 0 : face[1] == v ? 1 : 2;
-    const double* p = &mesh.xyz[3 * v];
-    const double* a = &mesh.xyz[3 * face[(i + 1) % 3]];
-    const double* b = &mesh.xyz[3 * face[(i + 2) % 3]];
-    const double u[3] = {a[0] - p[0], a[1] - p[1], a[2] - p[2]};
-    const double w[3] = {b[0] - p[0], b[1] - p[1], b[2] - p[2]};
-    const double c[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
-                         u[0] * w[1] - u[1] * w[0]};
-    return std::atan2(std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]),
-                      u[0] * w[0] + u[1] * w[1] + u[2] * w[2]);
-  };
-  // The face across f's edge (v, x), kNoFace on the outline; and f's corner neither v nor x.
-  auto across_edge = [&](std::uint32_t f, std::uint32_t v, std::uint32_t x) {
-    const auto& face = mesh.faces[f];
-    for (int i = 0; i < 3; ++i) {
-      const std::uint32_t a = face[i], b = face[(i + 1) % 3];
-      if ((a == v && b == x) || (a == x && b == v)) return across(f, i);
-    }
-    return kNoFace;
-  };
-  auto third = [&](std::uint32_t f, std::uint32_t v, std::uint32_t x) {
-    for (const std::uint32_t c : mesh.faces[f]) {
-      if (c != v && c != x) return c;
-    }
-    return kNoFace;
-  };
   for (std::uint32_t v = 0; v < nv; ++v) {
     const std::uint32_t faces = corner_first_[v + 1] - corner_first_[v];
     if (faces == 0) continue;
     const std::uint32_t f = corners_[corner_first_[v]].face;
-    // Walks round v from f leaving across its edge (v, x): the faces passed (f included) until
-    // back at f (closed) or at the outline.
-    double sum = 0;
-    auto walk = [&](std::uint32_t x, bool& closed) {
-      std::uint32_t cur = f, walked = 1;
-      closed = false;
-      for (int step = 0; step < kMaxFan; ++step) {
-        const std::uint32_t next = across_edge(cur, v, x);
-        if (next == kNoFace) return walked;
-        if (next == f) {
-          closed = true;
-          return walked;
-        }
-        sum += corner_angle(next, v);
-        ++walked;
-        x = third(next, v, x);
-        cur = next;
-      }
-      return walked;
-    };
-    sum = corner_angle(f, v);
-    const std::uint32_t x0 = third(f, v, kNoFace);
-    bool closed = false;
-    const std::uint32_t walked = walk(x0, closed);
-    // note: a fan not closed within kMaxFan faces, or not all of v's faces (fans meeting at v),
-    // is left to the caller's walk: its answer depends on the face it starts from.
-    if (closed) {
-      if (walked == faces && static_cast<int>(walked) <= kMaxFan) vertex_angle_[v] = sum;
+    const std::uint32_t x = third_corner(f, v, kNoFace);
+    const Fan fan = walk_fan(v, f, x);
+    // note: a fan that is not all of v's faces (fans meeting at v) is left to the caller's
+    // walk: its answer depends on the face it starts from.
+    if (fan.closed) {
+      if (fan.faces == faces) vertex_angle_[v] = fan.angle;
       continue;
     }
-    // On the outline: -1 where one open fan holds all of v's faces.
-    bool other_closed = false;
-    const std::uint32_t back = walk(third(f, v, x0), other_closed);
-    if (!other_closed && walked + back - 1 == faces && static_cast<int>(faces) <= kMaxFan) {
+    // On the outline: -1 where one open fan holds all of v's faces (walked both ways from f).
+    const Fan back = walk_fan(v, f, third_corner(f, v, x));
+    if (!back.closed && fan.faces + back.faces - 1 == faces &&
+        faces <= static_cast<std::uint32_t>(kMaxFan)) {
       vertex_angle_[v] = -1;
     }
   }

@@ -126,12 +126,32 @@ class SteinerGraph {
     const Edge& e = edges_[edge_of(node)];
     return e.sides[0].face == f ? e.sides[0].opposite : e.sides[1].opposite;
   }
-  // The sum of vertex v's corner angles where its faces form one closed fan (at most kMaxFan
-  // faces); -1 on the outline; NaN where its faces form several fans, or more (a caller walks
-  // round from a face of its own then).
-  double vertex_angle(std::uint32_t v) const { return vertex_angle_[v]; }
-  // Most faces round one vertex whose total angle is kept.
+  // The angle (3D) of face f at its corner v.
+  double corner_angle(std::uint32_t f, std::uint32_t v) const;
+  // The face across f's edge (v, x), kNoFace on the outline (or where (v, x) is not its edge).
+  std::uint32_t across_edge(std::uint32_t f, std::uint32_t v, std::uint32_t x) const;
+  // The corner of face f that is neither v nor x (kNoFace for x: f's first corner but v).
+  std::uint32_t third_corner(std::uint32_t f, std::uint32_t v, std::uint32_t x) const {
+    for (const std::uint32_t c : mesh_.faces[f]) {
+      if (c != v && c != x) return c;
+    }
+    return kNoFace;
+  }
+  // A walk round vertex v from face f, leaving f across its edge (v, x): the sum of the corner
+  // angles at v of the faces passed (f's included), how many, and whether it came back to f
+  // (else it reached the outline, or passed kMaxFan faces).
+  struct Fan {
+    double angle = 0;
+    std::uint32_t faces = 0;
+    bool closed = false;
+  };
+  Fan walk_fan(std::uint32_t v, std::uint32_t f, std::uint32_t x) const;
+  // Most faces a walk round one vertex passes.
   static constexpr int kMaxFan = 4096;
+  // The sum of vertex v's corner angles where its faces form one closed fan; -1 on the outline;
+  // NaN where its faces form several fans or more than kMaxFan (then a walk from a face of the
+  // caller's own, walk_fan, answers).
+  double vertex_angle(std::uint32_t v) const { return vertex_angle_[v]; }
   // Calls fn(f) for each face around vertex v (in no particular order).
   template <typename Fn>
   void for_each_face_of_vertex(std::uint32_t v, Fn&& fn) const {

@@ -56,6 +56,19 @@ core::HeightGrid hills_with_voids(int w, int h) {
   });
 }
 
+core::TriMesh pyramid_mesh(int n, double radius, double height) {
+  const double pi = std::acos(-1.0);
+  core::TriMesh m;
+  m.xyz = {0, 0, height};
+  for (int i = 0; i < n; ++i) {
+    m.xyz.insert(m.xyz.end(),
+                 {radius * std::cos(2 * pi * i / n), radius * std::sin(2 * pi * i / n), 0});
+  }
+  const auto sides = static_cast<std::uint32_t>(n);
+  for (std::uint32_t i = 0; i < sides; ++i) m.faces.push_back({0, 1 + i, 1 + (i + 1) % sides});
+  return m;
+}
+
 core::TriMesh hills_mesh(int w, int h) {
   const auto g = make_grid(w, h, [w, h](int c, int r) {
     if (std::hypot(c - 12.0, r - 14.0) < 4.0) return kVoid;

@@ -24,6 +24,10 @@ core::HeightGrid hills_with_voids(int width = 96, int height = 80);
 // faces are counter-clockwise (the collapse tests' input).
 core::TriMesh hills_mesh(int width = 40, int height = 32);
 
+// An n-sided pyramid (a polyhedral cone): apex 0 at (0, 0, height), base vertices 1..n on the
+// circle of `radius` at z = 0, faces (0, i, i + 1) counter-clockwise; no base face.
+core::TriMesh pyramid_mesh(int n, double radius, double height);
+
 // Positions (x, y) of the vertices on a mesh's border.
 std::set<std::pair<double, double>> border_points(const core::TriMesh& mesh);
 

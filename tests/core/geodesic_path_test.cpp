@@ -192,13 +192,7 @@ TEST_CASE("straightened paths on a pyramid are straight in its unfolded fan",
   // D apart, the geodesic is sqrt(r1^2 + r2^2 - 2 r1 r2 cos(min(D, B - D))).
   const int n = 16;
   const double radius = 100, height = 70;
-  core::TriMesh m;
-  m.xyz = {0, 0, height};
-  for (int i = 0; i < n; ++i) {
-    m.xyz.insert(m.xyz.end(),
-                 {radius * std::cos(2 * kPi * i / n), radius * std::sin(2 * kPi * i / n), 0});
-  }
-  for (std::uint32_t i = 0; i < n; ++i) m.faces.push_back({0, 1 + i, 1 + (i + 1) % n});
+  const core::TriMesh m = test::pyramid_mesh(n, radius, height);
   // Each face's angle at the apex; a point's unfolded angle is the angles of the faces before
   // its own plus its angle from the face's first edge.
   const double slant = std::hypot(radius, height);

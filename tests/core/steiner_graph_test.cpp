@@ -272,13 +272,7 @@ TEST_CASE("a vertex's total angle: its corners' sum in one closed fan, -1 on the
   SECTION("a 16-sided pyramid: the apex's angle is 16 times its faces' angle") {
     const int n = 16;
     const double radius = 100, height = 70;
-    core::TriMesh m;
-    m.xyz = {0, 0, height};
-    for (int i = 0; i < n; ++i) {
-      m.xyz.insert(m.xyz.end(),
-                   {radius * std::cos(2 * kPi * i / n), radius * std::sin(2 * kPi * i / n), 0});
-    }
-    for (std::uint32_t i = 0; i < n; ++i) m.faces.push_back({0, 1 + i, 1 + (i + 1) % n});
+    const core::TriMesh m = test::pyramid_mesh(n, radius, height);
     const core::SteinerGraph g(m, 20.0);
     const double slant = std::hypot(radius, height);
     const double beta = 2 * std::asin(radius * std::sin(kPi / n) / slant);
