@@ -53,6 +53,7 @@ const Setup* setup() {
       out->straightened = std::make_unique<dpts::core::SteinerGraph>(
           out->mesh,
           dpts::par::kStraightenedDeltaFactorDem * dpts::core::mean_edge_length(out->mesh));
+      out->straightened->keep_vertex_angles();
       out->points = dpts::core::sample_uniform(out->mesh, 100, 1);
       return out;
     } catch (const std::exception&) {

@@ -120,7 +120,6 @@ SteinerGraph::SteinerGraph(const TriMesh& mesh, double delta) : mesh_(mesh), del
   link_edges();
   bound_segments();
   build_corners();
-  build_angles();
   // note: the edge records hold each edge's nodes from here on.
   edge_first_ = std::vector<std::uint32_t>();
 }
@@ -308,10 +307,10 @@ SteinerGraph::Fan SteinerGraph::walk_fan(std::uint32_t v, std::uint32_t f, std::
 }
 
 // Each vertex's total angle, walked round its fan from its first corner's face as
-// PathStraightener walked it from a face of its path, so that the straightener reads it
+// PathStraightener walks it from a face of its path, so that the straightener reads it
 // instead of walking for each bend (its atan2 calls were 3 % of dpts-eval's time on San
 // Gabriel).
-void SteinerGraph::build_angles() {
+void SteinerGraph::keep_vertex_angles() {
   const std::size_t nv = mesh_.vertex_count();
   vertex_angle_.assign(nv, std::numeric_limits<double>::quiet_NaN());
   for (std::uint32_t v = 0; v < nv; ++v) {

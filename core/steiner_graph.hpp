@@ -148,10 +148,15 @@ class SteinerGraph {
   Fan walk_fan(std::uint32_t v, std::uint32_t f, std::uint32_t x) const;
   // Most faces a walk round one vertex passes.
   static constexpr int kMaxFan = 4096;
+  // Keeps each vertex's total angle (vertex_angle), 8 bytes a vertex, for PathStraightener,
+  // which otherwise walks round the vertex for every bend; plain searches do not need it.
+  void keep_vertex_angles();
   // The sum of vertex v's corner angles where its faces form one closed fan; -1 on the outline;
-  // NaN where its faces form several fans or more than kMaxFan (then a walk from a face of the
-  // caller's own, walk_fan, answers).
-  double vertex_angle(std::uint32_t v) const { return vertex_angle_[v]; }
+  // NaN where its faces form several fans or more than kMaxFan, or where the angles are not
+  // kept (then a walk from a face of the caller's own, walk_fan, answers).
+  double vertex_angle(std::uint32_t v) const {
+    return vertex_angle_.empty() ? std::numeric_limits<double>::quiet_NaN() : vertex_angle_[v];
+  }
   // Calls fn(f) for each face around vertex v (in no particular order).
   template <typename Fn>
   void for_each_face_of_vertex(std::uint32_t v, Fn&& fn) const {
@@ -217,7 +222,6 @@ class SteinerGraph {
   void link_edges();
   void bound_segments();
   void build_corners();
-  void build_angles();
 
   const TriMesh& mesh_;
   double delta_;
@@ -253,7 +257,7 @@ class SteinerGraph {
   HugeVector<Edge> edges_;
   std::vector<std::uint32_t> corner_first_;  // CSR vertex -> corners_
   HugeVector<Corner> corners_;
-  std::vector<double> vertex_angle_;  // per vertex: vertex_angle()
+  std::vector<double> vertex_angle_;  // per vertex: vertex_angle() (empty: not kept)
 };
 
 // Dijkstra's tentative distances with an indexed 4-ary min-heap over them (decrease-key: each

@@ -949,14 +949,16 @@ void plan_graphs(const core::TriMesh& original, const core::TriMesh& simplified,
   }
 }
 
-// Builds the Steiner graph of T (on_t) or T' into geo, the other one freed first; its size into
-// result, then says so through stage.
-void build_graph(Geodesics& geo, bool on_t, const core::TriMesh& mesh, EvalResult& result,
-                 const std::function<void(const std::string&)>& stage) {
+// Builds the Steiner graph of T (on_t) or T' into geo, the other one freed first (with its
+// vertices' angles where paths are straightened); its size into result, then says so through
+// stage.
+void build_graph(Geodesics& geo, bool on_t, const core::TriMesh& mesh, bool straighten,
+                 EvalResult& result, const std::function<void(const std::string&)>& stage) {
   geo.graph_t.reset();
   geo.graph_s.reset();
   auto& graph = on_t ? geo.graph_t : geo.graph_s;
   graph = std::make_unique<core::SteinerGraph>(mesh, on_t ? result.delta_m : result.delta_mesh_m);
+  if (straighten) graph->keep_vertex_angles();
   (on_t ? result.original_nodes : result.simplified_nodes) = graph->node_count();
   stage(std::string("Steiner graph of ") + (on_t ? "T: " : "T': ") +
         std::to_string(graph->node_count()) + " nodes");
@@ -1154,7 +1156,9 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
   std::vector<PairRoutes> routes_t(routes ? sets : 0), routes_s(routes ? sets : 0);
   const std::string kind = options.exact ? ": exact geodesics on T" : ": geodesics on T";
   for (const bool mesh_t : {false, true}) {
-    if (!options.exact) build_graph(geo, mesh_t, mesh_t ? original : simplified, result, stage);
+    if (!options.exact) {
+      build_graph(geo, mesh_t, mesh_t ? original : simplified, options.straighten, result, stage);
+    }
     for (std::size_t set = 0; set < sets; ++set) {
       const std::string name = stage_names[set] + kind + (mesh_t ? "" : "'");
       stage(name);
@@ -1183,7 +1187,7 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
   }
   if (routes) {
     const auto t0 = std::chrono::steady_clock::now();
-    build_graph(geo, false, simplified, result, stage);
+    build_graph(geo, false, simplified, true, result, stage);
     for (std::size_t set = 0; set < sets; ++set) {
       stage(stage_names[set] + ": routes of T on T'");
       result.shortened += shorten_along(*geo.graph_s, on_s[set], routes_t[set], ds[set]);
