@@ -340,8 +340,9 @@ SteinerGraph::Estimate SteinerGraph::estimate(const TriMesh& mesh, double delta)
   Estimate est;
   est.nodes = nodes < static_cast<double>(kMaxNodes) ? static_cast<std::size_t>(nodes) : kMaxNodes;
   // Per node its record; per edge its record and first node; per face its edges and 3 corners;
-  // per vertex its first corner; plus the sorted face edges and their Z order, which
-  // construction holds meanwhile.
+  // per vertex its first corner and its total angle (kept only for straightened paths, counted
+  // always: a bound); plus the sorted face edges and their Z order, which construction holds
+  // meanwhile.
   const std::size_t nf = mesh.faces.size();
   est.bytes = est.nodes * (sizeof(nodes_[0]) + sizeof(node_edge_[0])) + edges * (sizeof(Edge) + 4) +
               nf * (sizeof(std::array<std::uint32_t, 3>) + 3 * sizeof(Corner)) +
