@@ -2,6 +2,7 @@
 #include "core/indexed_heap.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <catch2/catch.hpp>
 #include <random>
 #include <tuple>
@@ -60,4 +61,26 @@ TEST_CASE("IndexedMinHeap orders any size at once, the smallest included", "[cor
     CHECK(popped.size() == n);
     CHECK(std::is_sorted(popped.begin(), popped.end()));
   }
+}
+
+TEST_CASE("IndexedMinHeap orders negative, zero and infinite keys as doubles compare",
+          "[core][heap]") {
+  // The keys are kept as integers of the same order: -0 ties with +0 (broken by the id's
+  // scramble), and top_key gives each key back.
+  using Heap = dpts::core::IndexedMinHeap;
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::vector<double> key = {3.5,  -0.0, 0.0,    -inf, 1e-300, -1e-300, inf,
+                                   -2.0, 2.0,  1e300, -0.0, 0.0,    7.25,    -7.25};
+  const auto n = static_cast<std::uint32_t>(key.size());
+  Heap heap(n);
+  for (std::uint32_t i = 0; i < n; ++i) heap.set(i, i % 2 ? 0.0 : key[i]);
+  for (std::uint32_t i = 1; i < n; i += 2) heap.set(i, key[i]);  // changed after insertion
+  std::vector<std::tuple<double, std::uint32_t, std::uint32_t>> expected;
+  for (std::uint32_t i = 0; i < n; ++i) expected.emplace_back(key[i], Heap::scramble(i), i);
+  std::sort(expected.begin(), expected.end());  // tuple order: -0.0 == 0.0, as the heap's
+  for (const auto& e : expected) {
+    REQUIRE(heap.top_key() == std::get<0>(e));
+    REQUIRE(heap.pop() == std::get<2>(e));
+  }
+  CHECK(heap.empty());
 }
