@@ -2,8 +2,8 @@
 #include "core/indexed_heap.hpp"
 
 #include <algorithm>
-#include <limits>
 #include <catch2/catch.hpp>
+#include <limits>
 #include <random>
 #include <tuple>
 #include <vector>
@@ -69,7 +69,7 @@ TEST_CASE("IndexedMinHeap orders negative, zero and infinite keys as doubles com
   // scramble), and top_key gives each key back.
   using Heap = dpts::core::IndexedMinHeap;
   const double inf = std::numeric_limits<double>::infinity();
-  const std::vector<double> key = {3.5,  -0.0, 0.0,    -inf, 1e-300, -1e-300, inf,
+  const std::vector<double> key = {3.5,  -0.0, 0.0,   -inf, 1e-300, -1e-300, inf,
                                    -2.0, 2.0,  1e300, -0.0, 0.0,    7.25,    -7.25};
   const auto n = static_cast<std::uint32_t>(key.size());
   Heap heap(n);
