@@ -48,6 +48,16 @@ class IndexedMinHeap {
     for (std::size_t i = std::min(size(), size() / kArity + 1); i-- > 0;) sift_down(i, at(i));
   }
 
+  // Hints that id's key will be set soon: its slot (prefetch_slot), then, once that is at
+  // hand, its entry and the entry's parent (prefetch), asked for from memory ahead of time.
+  void prefetch_slot(std::uint32_t id) const { __builtin_prefetch(&pos_[id]); }
+  void prefetch(std::uint32_t id) const {
+    const std::uint32_t p = pos_[id];
+    if (p == kAbsent) return;
+    __builtin_prefetch(&heap_[p]);
+    if (p > 0) __builtin_prefetch(&heap_[(p - 1) / kArity]);
+  }
+
   // Inserts id or changes its key.
   void set(std::uint32_t id, double key) {
     if (pos_[id] == kAbsent) {
