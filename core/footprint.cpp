@@ -1,8 +1,10 @@
 // The valid footprint of a DEM (see footprint.hpp) and exact point-in-footprint tests.
 #include "core/footprint.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 namespace dpts::core {
 namespace {
@@ -15,13 +17,6 @@ int square_mask(const HeightGrid& g, int c, int r) {
 }
 
 int popcount4(int m) { return (m & 1) + ((m >> 1) & 1) + ((m >> 2) & 1) + ((m >> 3) & 1); }
-
-// Whether the corner bit `corner` of square (c, r) belongs to a part of F.
-bool square_uses_corner(const HeightGrid& g, int c, int r, int corner) {
-  if (c < 0 || r < 0 || c + 1 >= g.width || r + 1 >= g.height) return false;
-  const int mask = square_mask(g, c, r);
-  return popcount4(mask) >= 3 && (mask & corner) != 0;
-}
 
 std::int64_t floor_div3(std::int64_t s) { return s >= 0 ? s / 3 : -((-s + 2) / 3); }
 
@@ -52,16 +47,39 @@ GridFrame GridFrame::from_jacobian(const double j[2][2]) {
 }
 
 std::vector<std::uint32_t> surface_cells(const HeightGrid& grid) {
+  // A cell is on the surface when a square with at least three valid corners uses it: each
+  // square's corner mask computed once (a row of squares at a time), its valid corners marked.
+  // note: where the per-cell test of its four squares took 16 validity tests a cell (2 % of
+  // qem's instructions on San Gabriel, a grid read per piece).
   std::vector<std::uint32_t> cells;
-  for (int r = 0; r < grid.height; ++r) {
-    for (int c = 0; c < grid.width; ++c) {
-      if (!grid.is_valid(c, r)) continue;
-      // The cell is corner 8 of square (c-1,r-1), 4 of (c,r-1), 2 of (c-1,r), 1 of (c,r).
-      if (square_uses_corner(grid, c, r, 1) || square_uses_corner(grid, c - 1, r, 2) ||
-          square_uses_corner(grid, c, r - 1, 4) || square_uses_corner(grid, c - 1, r - 1, 8)) {
-        cells.push_back(static_cast<std::uint32_t>(grid.index(c, r)));
+  const int w = grid.width, h = grid.height;
+  if (w < 2 || h < 2) return cells;
+  std::vector<std::uint8_t> valid(static_cast<std::size_t>(w) * 2);  // rows r and r + 1
+  std::vector<std::uint8_t> used(static_cast<std::size_t>(w) * 2);   // the same rows
+  std::uint8_t* top_valid = valid.data();
+  std::uint8_t* bottom_valid = valid.data() + w;
+  std::uint8_t* top_used = used.data();
+  std::uint8_t* bottom_used = used.data() + w;
+  for (int c = 0; c < w; ++c) top_valid[c] = !std::isnan(grid.z[grid.index(c, 0)]);
+  for (int r = 0; r < h; ++r) {
+    // Squares (c, r) have their top corners on row r, their bottom ones on row r + 1.
+    if (r + 1 < h) {
+      for (int c = 0; c < w; ++c) bottom_valid[c] = !std::isnan(grid.z[grid.index(c, r + 1)]);
+      for (int c = 0; c + 1 < w; ++c) {
+        const int n = top_valid[c] + top_valid[c + 1] + bottom_valid[c] + bottom_valid[c + 1];
+        if (n < 3) continue;
+        top_used[c] |= top_valid[c];
+        top_used[c + 1] |= top_valid[c + 1];
+        bottom_used[c] |= bottom_valid[c];
+        bottom_used[c + 1] |= bottom_valid[c + 1];
       }
     }
+    for (int c = 0; c < w; ++c) {
+      if (top_used[c]) cells.push_back(static_cast<std::uint32_t>(grid.index(c, r)));
+    }
+    std::swap(top_valid, bottom_valid);
+    std::swap(top_used, bottom_used);
+    std::fill(bottom_used, bottom_used + w, 0);
   }
   return cells;
 }

@@ -114,6 +114,7 @@ class IndexedMinHeap {
   }
 
  private:
+  __extension__ typedef unsigned __int128 U128;  // GCC's and Clang's (no ISO C++ type)
   // note: the key as an unsigned integer of the same order (the double's bits, the sign bit
   // flipped, negatives all flipped; -0 as +0, NaN above +infinity), and the entry laid out so
   // that one unsigned 128-bit comparison orders by (key, tie): sifting chooses among children
@@ -138,10 +139,10 @@ class IndexedMinHeap {
     return k;
   }
   static Entry entry(std::uint32_t id, double key) { return {id, scramble(id), encode(key)}; }
-  static unsigned __int128 value(const Entry& e) {
+  static U128 value(const Entry& e) {
     static_assert(sizeof(Entry) == 16 && offsetof(Entry, tie) == 4 && offsetof(Entry, key) == 8 &&
                   __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__);
-    unsigned __int128 v;
+    U128 v;
     std::memcpy(&v, &e, sizeof v);  // little-endian: key, then tie, then id
     return v;
   }

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "test_support.hpp"
 
@@ -48,6 +49,39 @@ TEST_CASE("isolated cells and one-cell strands are not surface vertices", "[core
   });
   CHECK(surface_cells(g).empty());
   CHECK(footprint_area_cells(g) == 0.0);
+}
+
+TEST_CASE("surface cells are the corners of squares with three or four valid corners",
+          "[core][footprint]") {
+  // Random voids at several densities and sizes (one row or column included), against the
+  // definition cell by cell: a valid cell is a surface vertex iff one of its four squares has
+  // at least three valid corners.
+  std::uint32_t state = 7;
+  auto next = [&] { return state = state * 1664525u + 1013904223u; };
+  for (int trial = 0; trial < 60; ++trial) {
+    const int w = 1 + static_cast<int>(next() >> 29), h = 1 + static_cast<int>(next() >> 29);
+    const std::uint32_t voids = next() >> 30;  // 0-3 quarters of the cells, about
+    std::vector<char> hole(static_cast<std::size_t>(w) * h);
+    for (auto& x : hole) x = (next() >> 30) < voids;
+    const auto g =
+        dpts::test::make_grid(w, h, [&](int c, int r) { return hole[r * w + c] ? kNaN : 1.0; });
+    auto valid = [&](int c, int r) {
+      return c >= 0 && r >= 0 && c < w && r < h && !hole[r * w + c];
+    };
+    auto full = [&](int c, int r) {  // square (c, r) has at least three valid corners
+      return valid(c, r) + valid(c + 1, r) + valid(c, r + 1) + valid(c + 1, r + 1) >= 3;
+    };
+    std::vector<std::uint32_t> expected;
+    for (int r = 0; r < h; ++r) {
+      for (int c = 0; c < w; ++c) {
+        if (valid(c, r) && (full(c, r) || full(c - 1, r) || full(c, r - 1) || full(c - 1, r - 1))) {
+          expected.push_back(static_cast<std::uint32_t>(r * w + c));
+        }
+      }
+    }
+    INFO("trial " << trial << ": " << w << " x " << h);
+    CHECK(surface_cells(g) == expected);
+  }
 }
 
 TEST_CASE("points on the outline are classified by the infinitesimal push", "[core][footprint]") {
