@@ -216,6 +216,7 @@ class Collapser {
     heap_.heapify();
     full_at_.assign(fv_.size(), kNone);
     stamp_.assign(xyz_.size() / 3, 0);
+    mark_.assign(xyz_.size() / 3, 0);
   }
 
   // The queued edges' costs (lower bounds of their full costs), appended to out.
@@ -279,6 +280,7 @@ class Collapser {
     edges_ = {};
     full_at_ = {};
     stamp_ = {};
+    mark_ = {};
     opp_ = {};
     out_ = {};
     area_ = {};
@@ -550,7 +552,7 @@ class Collapser {
   }
 
   // Topology (the link condition, no ear removed) and geometry (no fold, the bound).
-  bool valid(const Plan& p) const {
+  bool valid(const Plan& p) {
     const std::uint32_t h = p.h, a = src(h), b = dst(h);
     const std::uint32_t g = opp_[h];
     const std::uint32_t o1 = opp_[next_of(h)], o2 = opp_[prev_of(h)];
@@ -566,13 +568,18 @@ class Collapser {
     std::uint32_t na[kCap], nb[kCap];
     const int ka = neighbours(a, na, kCap), kb = neighbours(b, nb, kCap);
     if (ka + kb > kCap) return false;
+    // note: the common neighbours found by marking a's (a ring holds no vertex twice), not by
+    // testing every pair: the pair loop's exits were 9 % of qem's branch misses (cachegrind).
+    if (++ring_mark_ == 0) {
+      std::fill(mark_.begin(), mark_.end(), 0);
+      ring_mark_ = 1;
+    }
+    for (int i = 0; i < ka; ++i) mark_[na[i]] = ring_mark_;
     int common = 0;
-    for (int i = 0; i < ka; ++i) {
-      for (int j = 0; j < kb; ++j) {
-        if (na[i] != nb[j]) continue;
-        if (na[i] != c && na[i] != d) return false;
-        ++common;
-      }
+    for (int j = 0; j < kb; ++j) {
+      if (mark_[nb[j]] != ring_mark_) continue;
+      if (nb[j] != c && nb[j] != d) return false;
+      ++common;
     }
     if (common != (g == kNone ? 1 : 2)) return false;
     // The faces round a and b but the edge's own, with the moving corner at x: the faces round
@@ -762,6 +769,9 @@ class Collapser {
   // Per edge (its queue id) queued at its full cost: the collapses done then, else kNone; per
   // vertex, the collapses done when its star last changed (run()'s shortcut).
   std::vector<std::uint32_t> full_at_, stamp_;
+  // Per vertex: valid()'s mark of the first end's neighbours (ring_mark_ for this test).
+  std::vector<std::uint32_t> mark_;
+  std::uint32_t ring_mark_ = 0;
   std::uint32_t collapses_ = 0;
   bool prepared_ = false;
 };
