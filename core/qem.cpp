@@ -134,7 +134,11 @@ class Collapser {
       throw std::invalid_argument("qem: plane_xy needs 2 values per vertex and to_plane");
     }
     check();
-    link_opposites();
+    if (o_.opposites.empty()) {
+      link_opposites();
+    } else {
+      adopt_opposites();
+    }
     check();
     out_.assign(n, kNone);
     for (std::uint32_t h = 0; h < fv_.size(); ++h) {
@@ -385,6 +389,26 @@ class Collapser {
           opp_[h] = g;
           opp_[g] = h;
         }
+      }
+    }
+  }
+
+  // The caller's pairing (o_.opposites), each pair checked: two half-edges of one edge, in
+  // opposite directions.
+  // note: a grid TIN's is known from its squares (grid_tin), where link_opposites' search
+  // took 3.5 % of qem's instructions and 6 % of its branch misses; the pieces' pairing from
+  // the grid, checked here: San Gabriel to 10 %, 9.33G -> 9.18G instructions, 56.7M -> 54.7M
+  // branch misses (cachegrind).
+  void adopt_opposites() {
+    if (o_.opposites.size() != fv_.size()) {
+      throw std::invalid_argument("qem: one opposite per half-edge");
+    }
+    opp_ = std::move(o_.opposites);
+    const auto m = static_cast<std::uint32_t>(opp_.size());
+    for (std::uint32_t h = 0; h < m; ++h) {
+      const std::uint32_t g = opp_[h];
+      if (g != kNone && !(g < m && opp_[g] == h && src(g) == dst(h) && dst(g) == src(h))) {
+        throw std::invalid_argument("qem: opposite half-edges do not pair");
       }
     }
   }

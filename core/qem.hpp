@@ -54,6 +54,10 @@ struct QemOptions {
   // (their quadric may be partial: the piece engine's seams with pieces outside a pre-merge).
   // Empty: none.
   std::vector<char> frozen;
+  // Per half-edge of the mesh (face f's k-th, from corner k to corner k + 1 mod 3, is 3 f + k):
+  // the other face's half-edge on its edge, or 0xFFFFFFFF on the outline (grid_tin's, for a
+  // grid TIN). Checked to pair half-edges of opposite direction. Empty: found from the faces.
+  std::vector<std::uint32_t> opposites;
   // Per vertex: the starting quadrics (a piece engine's merge carries them on). Empty: each
   // vertex gets the triangle quadrics of its faces and the plane quadrics of its outline edges.
   std::vector<Quadric> quadrics;

@@ -54,9 +54,9 @@ Inside contains(const TriMesh& m, std::uint32_t f, double x, double y) {
   const double extent = std::max({size, std::fabs(px), std::fabs(py)});
   const double tol = 8.0 * kEps * extent * (magnitude + extent);
   const double sign = area > 0 ? 1.0 : -1.0;
-  const double ab = sign * (bx * py - by * px);                      // edge a-b
+  const double ab = sign * (bx * py - by * px);                              // edge a-b
   const double bc = sign * ((cx - bx) * (py - by) - (cy - by) * (px - bx));  // edge b-c
-  const double ca = sign * (px * cy - py * cx);                      // edge c-a
+  const double ca = sign * (px * cy - py * cx);                              // edge c-a
   return ab >= -tol && bc >= -tol && ca >= -tol ? Inside::yes : Inside::no;
 }
 
@@ -76,11 +76,10 @@ Diagonal delaunay_diagonal(const GridFrame& f) {
   // Every square maps to the same parallelogram; Delaunay takes its shorter diagonal (the
   // angles facing the longer one are obtuse), and on a tie CGAL's perturbation takes NW-SE.
   const double nw_u = f.u(1, 1), nw_w = f.w(1, 1), ne_u = f.u(-1, 1), ne_w = f.w(-1, 1);
-  return ne_u * ne_u + ne_w * ne_w < nw_u * nw_u + nw_w * nw_w ? Diagonal::ne_sw
-                                                                 : Diagonal::nw_se;
+  return ne_u * ne_u + ne_w * ne_w < nw_u * nw_u + nw_w * nw_w ? Diagonal::ne_sw : Diagonal::nw_se;
 }
 
-Tin grid_tin(const HeightGrid& g, Diagonal diagonal) {
+Tin grid_tin(const HeightGrid& g, Diagonal diagonal, std::vector<std::uint32_t>* opposites) {
   Tin t;
   t.cells = surface_cells(g);
   // Surface cell -> vertex index.
@@ -89,7 +88,19 @@ Tin grid_tin(const HeightGrid& g, Diagonal diagonal) {
   // note: two faces a cell at most; grown by push_back the array would hold up to twice that.
   t.faces.reserve(2 * static_cast<std::size_t>(std::max(g.width - 1, 0)) *
                   static_cast<std::size_t>(std::max(g.height - 1, 0)));
+  // With opposites: each square's half-edge on its south side, for the square below (a row),
+  // and on its east side, for the square to the right.
+  std::vector<std::uint32_t> south(static_cast<std::size_t>(std::max(g.width - 1, 0)), kNoOpposite);
+  // note: sized for two faces a square, cut to the faces at the end (grown a square at a time
+  // it was reallocated and filled as often as the faces).
+  if (opposites) opposites->assign(3 * t.faces.capacity(), kNoOpposite);
+  auto pair = [&](std::uint32_t h, std::uint32_t o) {
+    if (h == kNoOpposite || o == kNoOpposite) return;
+    (*opposites)[h] = o;
+    (*opposites)[o] = h;
+  };
   for (int r = 0; r + 1 < g.height; ++r) {
+    std::uint32_t east = kNoOpposite;  // the square to the left's
     for (int c = 0; c + 1 < g.width; ++c) {
       // Corners: a = (c,r) NW, b = (c+1,r) NE, s = (c,r+1) SW, d = (c+1,r+1) SE.
       const bool va = g.is_valid(c, r), vb = g.is_valid(c + 1, r);
@@ -97,28 +108,64 @@ Tin grid_tin(const HeightGrid& g, Diagonal diagonal) {
       const std::uint32_t a = index[g.index(c, r)], b = index[g.index(c + 1, r)];
       const std::uint32_t s = index[g.index(c, r + 1)], d = index[g.index(c + 1, r + 1)];
       const int n = va + vb + vs + vd;
+      const auto h0 = static_cast<std::uint32_t>(3 * t.faces.size());  // first new half-edge
+      // The square's half-edges on its sides (kNoOpposite: no face there).
+      std::uint32_t north = kNoOpposite, west = kNoOpposite, to_south = kNoOpposite,
+                    to_east = kNoOpposite;
       if (n == 4 && diagonal == Diagonal::nw_se) {
-        t.faces.push_back({a, s, d});
-        t.faces.push_back({a, d, b});
+        t.faces.push_back({a, s, d});  // a-s west, s-d south, d-a diagonal
+        t.faces.push_back({a, d, b});  // a-d diagonal, d-b east, b-a north
+        west = h0, to_south = h0 + 1, to_east = h0 + 4, north = h0 + 5;
+        if (opposites) pair(h0 + 2, h0 + 3);
       } else if (n == 4) {
-        t.faces.push_back({a, s, b});
-        t.faces.push_back({b, s, d});
+        t.faces.push_back({a, s, b});  // a-s west, s-b diagonal, b-a north
+        t.faces.push_back({b, s, d});  // b-s diagonal, s-d south, d-b east
+        west = h0, north = h0 + 2, to_south = h0 + 4, to_east = h0 + 5;
+        if (opposites) pair(h0 + 1, h0 + 3);
       } else if (n == 3) {
-        if (!va) t.faces.push_back({b, s, d});
-        if (!vb) t.faces.push_back({a, s, d});
-        if (!vs) t.faces.push_back({a, d, b});
-        if (!vd) t.faces.push_back({a, s, b});
+        if (!va) t.faces.push_back({b, s, d}), to_south = h0 + 1, to_east = h0 + 2;
+        if (!vb) t.faces.push_back({a, s, d}), west = h0, to_south = h0 + 1;
+        if (!vs) t.faces.push_back({a, d, b}), to_east = h0 + 1, north = h0 + 2;
+        if (!vd) t.faces.push_back({a, s, b}), west = h0, north = h0 + 2;
+      }
+      if (opposites) {
+        pair(north, south[c]);
+        pair(west, east);
+        south[c] = to_south;
+        east = to_east;
       }
     }
   }
   t.faces.shrink_to_fit();
+  if (opposites) {
+    opposites->resize(3 * t.faces.size());
+    opposites->shrink_to_fit();
+  }
   return t;
 }
 
-void fix_orientation(TriMesh& m) {
-  for (auto& f : m.faces) {
-    if (cross2(&m.xyz[3 * f[0]], &m.xyz[3 * f[1]], &m.xyz[3 * f[2]]) < 0) std::swap(f[1], f[2]);
+void fix_orientation(TriMesh& m, std::vector<std::uint32_t>* opposites) {
+  std::vector<char> reversed;
+  if (opposites) reversed.assign(m.faces.size(), 0);
+  for (std::size_t i = 0; i < m.faces.size(); ++i) {
+    auto& f = m.faces[i];
+    if (cross2(&m.xyz[3 * f[0]], &m.xyz[3 * f[1]], &m.xyz[3 * f[2]]) < 0) {
+      std::swap(f[1], f[2]);
+      if (opposites) reversed[i] = 1;
+    }
   }
+  if (!opposites || std::find(reversed.begin(), reversed.end(), 1) == reversed.end()) return;
+  // Face (v0, v1, v2) reversed to (v0, v2, v1): its half-edge k (on corners k, k + 1) is now
+  // its half-edge 2 - k.
+  auto renumber = [&](std::uint32_t h) {
+    if (h == kNoOpposite || !reversed[h / 3]) return h;
+    return h - h % 3 + (2 - h % 3);
+  };
+  std::vector<std::uint32_t> renumbered(opposites->size(), kNoOpposite);
+  for (std::uint32_t h = 0; h < opposites->size(); ++h) {
+    renumbered[renumber(h)] = renumber((*opposites)[h]);
+  }
+  *opposites = std::move(renumbered);
 }
 
 std::vector<SurfacePoint> sample_uniform(const TriMesh& m, std::size_t count, std::uint64_t seed) {
@@ -164,9 +211,9 @@ PointLocator::PointLocator(const TriMesh& mesh) : mesh_(mesh) {
                     std::numeric_limits<double>::min()});
   nx_ = std::max(1, static_cast<int>(std::ceil((x1 - x0_) / cell_)) + 1);
   ny_ = std::max(1, static_cast<int>(std::ceil((y1 - y0_) / cell_)) + 1);
-  const double pad = 16 * std::numeric_limits<double>::epsilon() *
-                    (std::max({std::fabs(x0_), std::fabs(x1), std::fabs(y0_), std::fabs(y1)}) +
-                     std::max(w, h));
+  const double pad =
+      16 * std::numeric_limits<double>::epsilon() *
+      (std::max({std::fabs(x0_), std::fabs(x1), std::fabs(y0_), std::fabs(y1)}) + std::max(w, h));
   std::vector<std::pair<std::uint32_t, std::uint32_t>> entries;  // (bucket, face)
   for (std::uint32_t f = 0; f < mesh.faces.size(); ++f) {
     double fx0 = 1e300, fx1 = -1e300, fy0 = 1e300, fy1 = -1e300;
@@ -204,7 +251,8 @@ std::optional<PointLocator::Hit> PointLocator::locate(double x, double y, double
   const long long ci = bucket((x - x0_) / cell_), cj = bucket((y - y0_) / cell_);
   double best_d2 = snap * snap;
   std::optional<std::uint32_t> nearest;
-  for (long long j = std::max(0LL, cj - reach); j <= std::min<long long>(ny_ - 1, cj + reach); ++j) {
+  for (long long j = std::max(0LL, cj - reach); j <= std::min<long long>(ny_ - 1, cj + reach);
+       ++j) {
     for (long long i = std::max(0LL, ci - reach); i <= std::min<long long>(nx_ - 1, ci + reach);
          ++i) {
       const std::size_t b = static_cast<std::size_t>(j) * nx_ + i;

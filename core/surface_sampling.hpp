@@ -25,10 +25,16 @@ Diagonal delaunay_diagonal(const GridFrame& frame);
 // footprint, see footprint.hpp). With delaunay_diagonal(frame) this is the Delaunay TIN the
 // elimination starts from. Vertices are the surface cells (ascending); faces index them, in
 // the grid's orientation (fix_orientation() makes them counter-clockwise in a given CRS).
-Tin grid_tin(const HeightGrid& grid, Diagonal diagonal = Diagonal::nw_se);
+// With opposites given: per half-edge (face f's k-th runs from corner k to corner k + 1 mod 3,
+// numbered 3 f + k) the other face's half-edge on the same edge, or kNoOpposite on the
+// outline: known from the squares, where a mesh's own pairing searches (qem's input).
+constexpr std::uint32_t kNoOpposite = 0xFFFFFFFFu;
+Tin grid_tin(const HeightGrid& grid, Diagonal diagonal = Diagonal::nw_se,
+             std::vector<std::uint32_t>* opposites = nullptr);
 
-// Reverses every face that is clockwise in mesh.xyz's x, y.
-void fix_orientation(TriMesh& mesh);
+// Reverses every face that is clockwise in mesh.xyz's x, y; with opposites given (grid_tin's
+// for these faces), renumbers them for the reversed faces.
+void fix_orientation(TriMesh& mesh, std::vector<std::uint32_t>* opposites = nullptr);
 
 // The grid TIN (grid_tin with delaunay_diagonal(frame)) in the frame: vertices (u, w, height in
 // frame units) of its cells, faces counter-clockwise. In the frame collinear cells stay exactly

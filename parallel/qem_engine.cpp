@@ -228,7 +228,8 @@ QemPieceMesh simplify_piece(const core::RasterSource& dem, const Positions& posi
   const int ww = wc1 - wc0, wh = wr1 - wr0;
   core::HeightGrid grid = read_window(dem, wc0, wr0, ww, wh, report.read_s);
   const auto t0 = std::chrono::steady_clock::now();
-  const core::Tin tin = core::grid_tin(grid, core::delaunay_diagonal(dem.frame()));
+  std::vector<std::uint32_t> opposites;
+  const core::Tin tin = core::grid_tin(grid, core::delaunay_diagonal(dem.frame()), &opposites);
   QemPieceMesh out;
   if (tin.faces.empty()) return out;
   const double unit = dem.frame().metres_per_unit;
@@ -261,7 +262,8 @@ QemPieceMesh simplify_piece(const core::RasterSource& dem, const Positions& posi
     locked += seam ? 1 : 0;
   }
   mesh.faces = tin.faces;
-  core::fix_orientation(mesh);
+  core::fix_orientation(mesh, &opposites);
+  qo.opposites = std::move(opposites);
   qo.outline_collinear = positions.collinear(&tin.cells, static_cast<std::uint64_t>(ww));
   const auto chord = dem.outline_chord_test(wc0, wr0, ww);
   if (chord) {

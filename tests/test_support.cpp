@@ -42,6 +42,20 @@ core::HeightGrid make_grid(int width, int height, const std::function<double(int
   return g;
 }
 
+core::HeightGrid random_voids_grid(std::uint32_t seed, int trial,
+                                   const std::function<double(int, int)>& f) {
+  std::uint32_t state = seed * 2654435761u + static_cast<std::uint32_t>(trial) * 40503u;
+  auto next = [&] { return state = state * 1664525u + 1013904223u; };
+  const int w = 1 + static_cast<int>(next() >> 29), h = 1 + static_cast<int>(next() >> 29);
+  const std::uint32_t voids = next() >> 30;
+  std::vector<char> hole(static_cast<std::size_t>(w) * h);
+  for (auto& x : hole) x = (next() >> 30) < voids;
+  return make_grid(w, h, [&](int c, int r) {
+    return hole[static_cast<std::size_t>(r) * w + c] ? std::numeric_limits<double>::quiet_NaN()
+                                                     : f(c, r);
+  });
+}
+
 namespace {
 const double kVoid = std::numeric_limits<double>::quiet_NaN();
 }  // namespace

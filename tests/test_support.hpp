@@ -16,6 +16,12 @@ namespace dpts::test {
 // A width x height grid with z = f(col, row); f returning NaN makes a no-data cell.
 core::HeightGrid make_grid(int width, int height, const std::function<double(int, int)>& f);
 
+// Small grids with random voids, for tests against a definition: grid `trial` of a fixed
+// sequence (seed), 1 to 8 cells a side (one row or column included), 0 to 3 quarters of its
+// cells no-data (about), z = f(col, row) elsewhere.
+core::HeightGrid random_voids_grid(std::uint32_t seed, int trial,
+                                   const std::function<double(int, int)>& f);
+
 // Hills with voids placed across the piece engines' first split lines: a round void in the
 // middle, a long straight one-row river, a notch in the east edge and a cut corner.
 core::HeightGrid hills_with_voids(int width = 96, int height = 80);

@@ -56,18 +56,10 @@ TEST_CASE("surface cells are the corners of squares with three or four valid cor
   // Random voids at several densities and sizes (one row or column included), against the
   // definition cell by cell: a valid cell is a surface vertex iff one of its four squares has
   // at least three valid corners.
-  std::uint32_t state = 7;
-  auto next = [&] { return state = state * 1664525u + 1013904223u; };
   for (int trial = 0; trial < 60; ++trial) {
-    const int w = 1 + static_cast<int>(next() >> 29), h = 1 + static_cast<int>(next() >> 29);
-    const std::uint32_t voids = next() >> 30;  // 0-3 quarters of the cells, about
-    std::vector<char> hole(static_cast<std::size_t>(w) * h);
-    for (auto& x : hole) x = (next() >> 30) < voids;
-    const auto g =
-        dpts::test::make_grid(w, h, [&](int c, int r) { return hole[r * w + c] ? kNaN : 1.0; });
-    auto valid = [&](int c, int r) {
-      return c >= 0 && r >= 0 && c < w && r < h && !hole[r * w + c];
-    };
+    const auto g = dpts::test::random_voids_grid(7, trial, [](int, int) { return 1.0; });
+    const int w = g.width, h = g.height;
+    auto valid = [&](int c, int r) { return g.is_valid(c, r); };
     auto full = [&](int c, int r) {  // square (c, r) has at least three valid corners
       return valid(c, r) + valid(c + 1, r) + valid(c, r + 1) + valid(c + 1, r + 1) >= 3;
     };

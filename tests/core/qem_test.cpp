@@ -2,8 +2,8 @@
 // fewer outline vertices, the chord test asked, locked vertices untouched, quadrics carried.
 #include "core/qem.hpp"
 
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
 #include <set>
@@ -223,4 +223,43 @@ TEST_CASE("qem refuses an edge of three faces and faces oriented unlike", "[core
   // Run opposite ways: accepted.
   m.faces = {{0, 1, 2}, {1, 0, 3}};
   CHECK_NOTHROW(core::qem_simplify(m, 4));
+}
+
+TEST_CASE("qem with a grid TIN's own pairing of half-edges gives the same mesh", "[core][qem]") {
+  // test::hills_mesh's grid (voids, three-corner squares) with grid_tin's opposites, renumbered
+  // by fix_orientation (every face reversed here: y = -row), against qem's own pairing.
+  const int w = 40, h = 34;
+  const auto g = test::make_grid(w, h, [](int c, int r) {
+    if (std::hypot(c - 12.0, r - 14.0) < 4.0 || (c > 30 && r > 10 && r < 16) || c + r < 3) {
+      return std::numeric_limits<double>::quiet_NaN();
+    }
+    return 10.0 * std::sin(c * 0.3) * std::cos(r * 0.25) + 0.3 * c;
+  });
+  std::vector<std::uint32_t> opposites;
+  const core::Tin tin = core::grid_tin(g, core::Diagonal::nw_se, &opposites);
+  core::TriMesh in;
+  for (const std::uint32_t cell : tin.cells) {
+    const double c = cell % static_cast<std::uint32_t>(w), r = cell / static_cast<std::uint32_t>(w);
+    in.xyz.insert(in.xyz.end(), {c, -r, g.z[cell]});
+  }
+  in.faces = tin.faces;
+  core::fix_orientation(in, &opposites);
+  const std::size_t keep = in.vertex_count() / 10;
+  const core::QemResult plain = core::qem_simplify(in, keep);
+  core::QemOptions options;
+  options.opposites = opposites;
+  const core::QemResult given = core::qem_simplify(in, keep, options);
+  CHECK(given.mesh.xyz == plain.mesh.xyz);
+  CHECK(given.mesh.faces == plain.mesh.faces);
+  CHECK(given.collapses == plain.collapses);
+  // A pairing that does not pair (one pair's half-edges swapped for two of one face) or runs
+  // out of step with the faces is refused.
+  std::size_t h0 = 0;
+  while (opposites[h0] == core::kNoOpposite) ++h0;
+  options.opposites = opposites;
+  options.opposites[h0] = h0 - h0 % 3 + (h0 % 3 + 1) % 3;
+  CHECK_THROWS_WITH(core::qem_simplify(in, keep, options), Catch::Contains("do not pair"));
+  options.opposites.assign(opposites.begin(), opposites.end() - 3);
+  CHECK_THROWS_WITH(core::qem_simplify(in, keep, options),
+                    Catch::Contains("one opposite per half-edge"));
 }

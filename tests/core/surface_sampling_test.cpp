@@ -17,9 +17,8 @@ namespace {
 // c > r + 2: three-corner squares along it, so the outline runs along square diagonals), in UTM
 // metres: cells of 9.87654 m from (562193.7312, 5119847.2163), none of it exact in binary.
 core::TriMesh staircase_utm() {
-  const auto g = test::make_grid(12, 12, [](int c, int r) {
-    return c > r + 2 ? std::nan("") : 1200.0 + 3.7 * c - 2.1 * r;
-  });
+  const auto g = test::make_grid(
+      12, 12, [](int c, int r) { return c > r + 2 ? std::nan("") : 1200.0 + 3.7 * c - 2.1 * r; });
   const auto tin = core::grid_tin(g);
   core::TriMesh m;
   for (auto cell : tin.cells) {
@@ -32,6 +31,44 @@ core::TriMesh staircase_utm() {
 }
 
 }  // namespace
+
+TEST_CASE("grid_tin's opposites pair each edge's two half-edges, also once faces are reversed",
+          "[core][sampling]") {
+  // Random voids (three-corner squares, strands, single cells) on grids of 1 to 9 cells a
+  // side, both diagonals, faces as grid_tin gives them and all reversed by fix_orientation
+  // (positions x = column, y = row): each half-edge against a search of the faces.
+  for (int trial = 0; trial < 80; ++trial) {
+    const auto g = test::random_voids_grid(11, trial, [](int c, int r) { return 1.0 * c * r; });
+    const int w = g.width, h = g.height;
+    for (const auto diagonal : {core::Diagonal::nw_se, core::Diagonal::ne_sw}) {
+      for (const bool reverse : {false, true}) {
+        std::vector<std::uint32_t> opposites;
+        const core::Tin tin = core::grid_tin(g, diagonal, &opposites);
+        core::TriMesh m;
+        for (const auto cell : tin.cells) {
+          const double c = cell % static_cast<std::uint32_t>(w),
+                       r = cell / static_cast<std::uint32_t>(w);
+          m.xyz.insert(m.xyz.end(), {c, reverse ? r : -r, 0.0});
+        }
+        m.faces = tin.faces;
+        core::fix_orientation(m, &opposites);
+        if (reverse && !m.faces.empty()) CHECK(m.faces != tin.faces);
+        std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> half_edge;
+        for (std::uint32_t f = 0; f < m.faces.size(); ++f) {
+          for (std::uint32_t k = 0; k < 3; ++k)
+            half_edge[{m.faces[f][k], m.faces[f][(k + 1) % 3]}] = 3 * f + k;
+        }
+        std::vector<std::uint32_t> expected(3 * m.faces.size(), core::kNoOpposite);
+        for (const auto& [e, hh] : half_edge) {
+          const auto it = half_edge.find({e.second, e.first});
+          if (it != half_edge.end()) expected[hh] = it->second;
+        }
+        INFO("trial " << trial << ": " << w << " x " << h << (reverse ? ", reversed" : ""));
+        CHECK(opposites == expected);
+      }
+    }
+  }
+}
 
 TEST_CASE("PointLocator finds points on every edge of a UTM-sized TIN inside it",
           "[core][sampling][robust]") {
