@@ -215,6 +215,9 @@ struct Eliminator::Impl {
         fc->info().inside = label(fc);
       }
       s.ring.push_back(fc->vertex(Delaunay::ccw(i)));
+      // note: the ring's points are read next (the refill's predicates, the star's heights),
+      // each vertex's first touch a cache miss: asked for now, all of them at once.
+      __builtin_prefetch(&s.ring.back()->point());
       s.inside.push_back(!dt.is_infinite(fc) && fc->info().inside == 1);
     } while (++fc != done);
   }
