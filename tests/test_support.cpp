@@ -83,21 +83,21 @@ core::TriMesh pyramid_mesh(int n, double radius, double height) {
   return m;
 }
 
-core::TriMesh hills_mesh(int w, int h) {
+core::TriMesh hills_mesh(int w, int h, std::vector<std::uint32_t>* opposites) {
   const auto g = make_grid(w, h, [w, h](int c, int r) {
     if (std::hypot(c - 12.0, r - 14.0) < 4.0) return kVoid;
     if (c >= w - 6 && r >= h / 2 - 2 && r <= h / 2 + 2) return kVoid;
     if (c + r < 3) return kVoid;
     return 10.0 * std::sin(c * 0.3) * std::cos(r * 0.25) + 0.3 * c;
   });
-  const core::Tin tin = core::grid_tin(g);
+  const core::Tin tin = core::grid_tin(g, core::Diagonal::nw_se, opposites);
   core::TriMesh m;
   for (std::uint32_t cell : tin.cells) {
     const double c = cell % static_cast<std::uint32_t>(w), r = cell / static_cast<std::uint32_t>(w);
     m.xyz.insert(m.xyz.end(), {c, -r, g.z[cell]});
   }
   m.faces = tin.faces;
-  core::fix_orientation(m);
+  core::fix_orientation(m, opposites);
   return m;
 }
 

@@ -27,8 +27,10 @@ core::HeightGrid random_voids_grid(std::uint32_t seed, int trial,
 core::HeightGrid hills_with_voids(int width = 96, int height = 80);
 
 // The grid TIN of hills with a void, a notch and a cut corner, vertices at (col, -row) so
-// faces are counter-clockwise (the collapse tests' input).
-core::TriMesh hills_mesh(int width = 40, int height = 32);
+// faces are counter-clockwise (the collapse tests' input). With opposites given: grid_tin's
+// pairing of its half-edges (as fix_orientation leaves it).
+core::TriMesh hills_mesh(int width = 40, int height = 32,
+                         std::vector<std::uint32_t>* opposites = nullptr);
 
 // An n-sided pyramid (a polyhedral cone): apex 0 at (0, 0, height), base vertices 1..n on the
 // circle of `radius` at z = 0, faces (0, i, i + 1) counter-clockwise; no base face.

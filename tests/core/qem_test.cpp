@@ -226,24 +226,10 @@ TEST_CASE("qem refuses an edge of three faces and faces oriented unlike", "[core
 }
 
 TEST_CASE("qem with a grid TIN's own pairing of half-edges gives the same mesh", "[core][qem]") {
-  // test::hills_mesh's grid (voids, three-corner squares) with grid_tin's opposites, renumbered
-  // by fix_orientation (every face reversed here: y = -row), against qem's own pairing.
-  const int w = 40, h = 34;
-  const auto g = test::make_grid(w, h, [](int c, int r) {
-    if (std::hypot(c - 12.0, r - 14.0) < 4.0 || (c > 30 && r > 10 && r < 16) || c + r < 3) {
-      return std::numeric_limits<double>::quiet_NaN();
-    }
-    return 10.0 * std::sin(c * 0.3) * std::cos(r * 0.25) + 0.3 * c;
-  });
+  // test::hills_mesh (voids, a notch, three-corner squares) with grid_tin's opposites, against
+  // qem's own pairing. (Faces reversed by fix_orientation: surface_sampling_test.)
   std::vector<std::uint32_t> opposites;
-  const core::Tin tin = core::grid_tin(g, core::Diagonal::nw_se, &opposites);
-  core::TriMesh in;
-  for (const std::uint32_t cell : tin.cells) {
-    const double c = cell % static_cast<std::uint32_t>(w), r = cell / static_cast<std::uint32_t>(w);
-    in.xyz.insert(in.xyz.end(), {c, -r, g.z[cell]});
-  }
-  in.faces = tin.faces;
-  core::fix_orientation(in, &opposites);
+  const core::TriMesh in = test::hills_mesh(40, 32, &opposites);
   const std::size_t keep = in.vertex_count() / 10;
   const core::QemResult plain = core::qem_simplify(in, keep);
   core::QemOptions options;

@@ -34,7 +34,7 @@ core::TriMesh staircase_utm() {
 
 TEST_CASE("grid_tin's opposites pair each edge's two half-edges, also once faces are reversed",
           "[core][sampling]") {
-  // Random voids (three-corner squares, strands, single cells) on grids of 1 to 9 cells a
+  // Random voids (three-corner squares, strands, single cells) on grids of 1 to 8 cells a
   // side, both diagonals, faces as grid_tin gives them and all reversed by fix_orientation
   // (positions x = column, y = row): each half-edge against a search of the faces.
   for (int trial = 0; trial < 80; ++trial) {
