@@ -1,5 +1,7 @@
 // BM_dijkstra_one_source: one Dijkstra query (1 source -> 99 targets) on the Steiner graph of a
 // 1000 x 1000-cell crop (1M cells) of the Pyrenees SRTM tile, at the default delta.
+// BM_anchored_one_source: one anchored search as dpts-eval runs it on T (straight segments
+// across faces, bends tracked with waypoints), 1 source -> 99 targets, to the whole graph.
 // BM_straighten_paths: the paths of one anchored search (1 source -> 99 targets, dpts-eval's
 // default delta on T) pulled taut (PathStraightener::shortest, as dpts-eval does per pair).
 #include <benchmark/benchmark.h>
@@ -85,6 +87,32 @@ void BM_dijkstra_one_source(benchmark::State& state) {
       benchmark::Counter(nodes * state.iterations(), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_dijkstra_one_source)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+void BM_anchored_one_source(benchmark::State& state) {
+  const Setup* s = setup();
+  if (!s) {
+    state.SkipWithError(("cannot read " + kDem).c_str());
+    return;
+  }
+  dpts::core::GeodesicQuery query(*s->straightened);
+  query.set_anchored(true);
+  query.set_track_bends(true, 2 * s->straightened->max_segment());
+  const std::vector<dpts::core::SurfacePoint> targets(s->points.begin() + 1, s->points.end());
+  std::vector<double> d;
+  double sum = 0;
+  for (auto _ : state) {
+    query.distances(s->points[0], targets, d);
+    for (double x : d) sum += x;
+    benchmark::DoNotOptimize(sum);
+  }
+  const double nodes = static_cast<double>(query.settled());
+  state.counters["settled"] = nodes;
+  // note: kInvert of a rate: seconds per settled node.
+  state.counters["s/node"] =
+      benchmark::Counter(nodes * static_cast<double>(state.iterations()),
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_anchored_one_source)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 
 void BM_straighten_paths(benchmark::State& state) {
   const Setup* s = setup();
