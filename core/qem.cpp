@@ -179,11 +179,6 @@ class Collapser {
     if (prepared_) return;
     prepared_ = true;
     heap_ = IndexedMinHeap(fv_.size());
-    // note: sized for every edge at once: grown by doubling, the merge's queue (San Gabriel:
-    // 2 x 10^5 edges) was copied 17 times, 4 of the serial merge's 19 ms of first costs.
-    std::size_t edges = 0;
-    for (std::uint32_t h = 0; h < fv_.size(); ++h) edges += first_edge(h) ? 1 : 0;
-    heap_.reserve(edges);
     // note: with o_.for_ranges, each edge's first cost on its own, maybe on several threads,
     // then queued in edge order: the same queue as in order on this thread.
     // Edge h's first cost into cost; false if it has none (not queued).

@@ -3,8 +3,10 @@
 
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <limits>
 #include <random>
+#include <set>
 #include <tuple>
 #include <vector>
 
@@ -83,4 +85,84 @@ TEST_CASE("IndexedMinHeap orders negative, zero and infinite keys as doubles com
     REQUIRE(heap.pop() == std::get<2>(e));
   }
   CHECK(heap.empty());
+}
+
+TEST_CASE("IndexedMinHeap pops as an ordered set does, keys spread over many bands",
+          "[core][heap]") {
+  // The heap keeps only the lowest band of keys ordered and sets the others aside: keys over
+  // 40 binary orders of magnitude, both signs, moved up and down across bands and into the
+  // heap, erased from either, pops interleaved; each pop must be the least (key, tie) queued.
+  using Heap = dpts::core::IndexedMinHeap;
+  for (const unsigned seed : {1u, 2u, 3u}) {
+    INFO(seed);
+    const std::uint32_t n = 3000;
+    Heap heap(n);
+    std::mt19937 rng(seed);
+    auto draw = [&]() {
+      const double mag =
+          std::ldexp(1.0 + (rng() % 1000) / 1000.0, static_cast<int>(rng() % 40) - 20);
+      switch (rng() % 8) {
+        case 0:
+          return -mag;
+        case 1:
+          return 0.0;
+        case 2:
+          return std::ldexp(static_cast<double>(rng() % 4), -3);  // exact ties
+        default:
+          return mag;
+      }
+    };
+    using Key = std::tuple<double, std::uint32_t, std::uint32_t>;  // key, scramble, id
+    std::set<Key> ref;
+    std::vector<double> key(n);
+    std::vector<bool> queued(n, false);
+    auto unqueue = [&](std::uint32_t id) {
+      if (queued[id]) ref.erase(Key{key[id], Heap::scramble(id), id});
+      queued[id] = false;
+    };
+    // A start as the callers make it: unordered, then ordered at once.
+    for (std::uint32_t id = 0; id < n; id += 3) {
+      key[id] = draw();
+      heap.push_unordered(id, key[id]);
+      ref.insert(Key{key[id], Heap::scramble(id), id});
+      queued[id] = true;
+    }
+    heap.heapify();
+    for (int step = 0; step < 40000; ++step) {
+      const std::uint32_t id = rng() % n;
+      const unsigned op = rng() % 10;
+      if (op < 2) {
+        heap.erase(id);
+        unqueue(id);
+      } else if (op < 4 && !ref.empty()) {
+        REQUIRE(heap.top_key() == std::get<0>(*ref.begin()));
+        REQUIRE(heap.pop() == std::get<2>(*ref.begin()));
+        queued[std::get<2>(*ref.begin())] = false;
+        ref.erase(ref.begin());
+      } else {
+        unqueue(id);
+        // note: mostly upwards, as the simplifiers' keys move, sometimes far down
+        key[id] = rng() % 4 == 0 ? draw() : std::fabs(draw()) * 4;
+        heap.set(id, key[id]);
+        ref.insert(Key{key[id], Heap::scramble(id), id});
+        queued[id] = true;
+      }
+      REQUIRE(heap.size() == ref.size());
+      REQUIRE(heap.empty() == ref.empty());
+      for (std::uint32_t probe : {id, static_cast<std::uint32_t>(rng() % n)}) {
+        REQUIRE(heap.contains(probe) == static_cast<bool>(queued[probe]));
+      }
+    }
+    std::vector<double> keys;
+    heap.for_each_key([&](double k) { keys.push_back(k); });
+    std::vector<double> want;
+    for (const Key& k : ref) want.push_back(std::get<0>(k));
+    std::sort(keys.begin(), keys.end());
+    CHECK(keys == want);
+    for (const Key& k : ref) {
+      REQUIRE(heap.top_key() == std::get<0>(k));
+      REQUIRE(heap.pop() == std::get<2>(k));
+    }
+    CHECK(heap.empty());
+  }
 }
