@@ -1,7 +1,8 @@
 // BM_dijkstra_one_source: one Dijkstra query (1 source -> 99 targets) on the Steiner graph of a
 // 1000 x 1000-cell crop (1M cells) of the Pyrenees SRTM tile, at the default delta.
 // BM_anchored_one_source: one anchored search as dpts-eval runs it on T (straight segments
-// across faces, bends tracked with waypoints), 1 source -> 99 targets, to the whole graph.
+// across faces, bends tracked with waypoints), 1 source -> 99 targets, until all are settled
+// (most of the graph).
 // BM_straighten_paths: the paths of one anchored search (1 source -> 99 targets, dpts-eval's
 // default delta on T) pulled taut (PathStraightener::shortest, as dpts-eval does per pair).
 #include <benchmark/benchmark.h>
