@@ -53,8 +53,7 @@ class IndexedMinHeap {
     for (std::uint32_t b = lowest_band(0); b < bound_band_; b = lowest_band(b + 1)) {
       take_band(b);
     }
-    const std::size_t n = heap_.size();
-    for (std::size_t i = std::min(n, n / kArity + 1); i-- > 0;) sift_down(i, at(i));
+    order();
     if (heap_.empty()) refill();
   }
 
@@ -71,44 +70,31 @@ class IndexedMinHeap {
   // Inserts id or changes its key.
   void set(std::uint32_t id, double key) {
     const std::uint32_t p = pos_[id];
-    Entry e = entry(id, key);
-    const bool in_heap = band(e.key) < bound_band_;
-    if (p == kAbsent) {
-      if (in_heap) {
-        heap_.push_back(e);
-        sift_up(heap_.size() - 1, e);
-      } else {
-        to_band(e);
-        if (heap_.empty()) refill();
+    const std::uint64_t k = encode(key);
+    if (p < kInBand) {  // in the heap: moved there, or out to its band
+      Entry e = at(p);
+      e.key = k;
+      if (band(k) < bound_band_) {
+        if (less(e, at(p))) {
+          sift_up(p, e);
+        } else {
+          sift_down(p, e);
+        }
+        return;
       }
+      remove_at(p);
+      queue(e);
       return;
     }
-    if (p >= kInBand) {
+    if (p != kAbsent) {  // in a band: changed there, or moved
       const std::uint32_t old = band_of_[id];
-      if (!in_heap && old == band(e.key)) {
-        band_vec(old)[p - kInBand].key = e.key;
+      if (band(k) >= bound_band_ && band(k) == old) {
+        band_vec(old)[p - kInBand].key = k;
         return;
       }
       from_band(id);
-      if (in_heap) {
-        heap_.push_back(e);
-        sift_up(heap_.size() - 1, e);
-      } else {
-        to_band(e);
-      }
-      return;
     }
-    if (!in_heap) {
-      remove_at(p);
-      to_band(e);
-      if (heap_.empty()) refill();
-      return;
-    }
-    if (less(e, at(p))) {
-      sift_up(p, e);
-    } else {
-      sift_down(p, e);
-    }
+    queue(Entry{id, scramble(id), k});
   }
 
   void erase(std::uint32_t id) {
@@ -263,8 +249,23 @@ class IndexedMinHeap {
   void refill() {
     if (banded_ == 0) return;
     take_band(lowest_band(bound_band_));
+    order();
+  }
+  // The heap's entries, in any order, made a heap (in O(n)).
+  void order() {
     const std::size_t n = heap_.size();
     for (std::size_t i = std::min(n, n / kArity + 1); i-- > 0;) sift_down(i, at(i));
+  }
+  // Entry e (its id not queued) into the heap below the bound, else into its band; the heap
+  // refilled if that left it empty.
+  void queue(const Entry& e) {
+    if (band(e.key) < bound_band_) {
+      heap_.push_back(e);
+      sift_up(heap_.size() - 1, e);
+    } else {
+      to_band(e);
+      if (heap_.empty()) refill();
+    }
   }
   // The heap's entry at slot p taken out (its pos_ left for the caller to set).
   void remove_at(std::size_t p) {
