@@ -66,14 +66,23 @@ const Setup* setup() {
   return s.get();
 }
 
-void BM_dijkstra_one_source(benchmark::State& state) {
+// The setup, or null with the benchmark marked skipped (the DEM cannot be read).
+const Setup* setup_or_skip(benchmark::State& state) {
   const Setup* s = setup();
-  if (!s) {
-    state.SkipWithError(("cannot read " + kDem).c_str());
-    return;
-  }
+  if (!s) state.SkipWithError(("cannot read " + kDem).c_str());
+  return s;
+}
+
+// The targets of the one-source benchmarks: every sample point but the first (the source).
+std::vector<dpts::core::SurfacePoint> others(const Setup& s) {
+  return {s.points.begin() + 1, s.points.end()};
+}
+
+void BM_dijkstra_one_source(benchmark::State& state) {
+  const Setup* s = setup_or_skip(state);
+  if (!s) return;
   dpts::core::GeodesicQuery query(*s->graph);
-  const std::vector<dpts::core::SurfacePoint> targets(s->points.begin() + 1, s->points.end());
+  const std::vector<dpts::core::SurfacePoint> targets = others(*s);
   std::vector<double> d;
   for (auto _ : state) {
     query.distances(s->points[0], targets, d);
@@ -90,15 +99,12 @@ void BM_dijkstra_one_source(benchmark::State& state) {
 BENCHMARK(BM_dijkstra_one_source)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 void BM_anchored_one_source(benchmark::State& state) {
-  const Setup* s = setup();
-  if (!s) {
-    state.SkipWithError(("cannot read " + kDem).c_str());
-    return;
-  }
+  const Setup* s = setup_or_skip(state);
+  if (!s) return;
   dpts::core::GeodesicQuery query(*s->straightened);
   query.set_anchored(true);
   query.set_track_bends(true, 2 * s->straightened->max_segment());
-  const std::vector<dpts::core::SurfacePoint> targets(s->points.begin() + 1, s->points.end());
+  const std::vector<dpts::core::SurfacePoint> targets = others(*s);
   std::vector<double> d;
   double sum = 0;
   for (auto _ : state) {
@@ -116,14 +122,11 @@ void BM_anchored_one_source(benchmark::State& state) {
 BENCHMARK(BM_anchored_one_source)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 
 void BM_straighten_paths(benchmark::State& state) {
-  const Setup* s = setup();
-  if (!s) {
-    state.SkipWithError(("cannot read " + kDem).c_str());
-    return;
-  }
+  const Setup* s = setup_or_skip(state);
+  if (!s) return;
   dpts::core::GeodesicQuery query(*s->straightened);
   query.set_anchored(true);
-  const std::vector<dpts::core::SurfacePoint> targets(s->points.begin() + 1, s->points.end());
+  const std::vector<dpts::core::SurfacePoint> targets = others(*s);
   std::vector<double> d;
   query.distances(s->points[0], targets, d);
   dpts::core::PathStraightener straightener(*s->straightened);
