@@ -386,7 +386,7 @@ std::string self_path(const char* argv0) {
   return ec ? std::string(argv0) : p.string();
 }
 
-// What every process (and every rank of dpts-mpi) sets up first: signals and GDAL.
+// What every process (and every rank of dpts-mpi) sets up first: signals, malloc and GDAL.
 void start_process() {
   // note: sigaction without SA_RESTART, so a batch's waitpid() returns on a signal. A hang-up
   // (the terminal closed) stops the run as Ctrl-C does; a closed pipe on stderr does not
@@ -399,6 +399,7 @@ void start_process() {
   sigaction(SIGTERM, &sa, nullptr);
   sigaction(SIGHUP, &sa, nullptr);
   std::signal(SIGPIPE, SIG_IGN);
+  dpts::par::keep_freed_memory();
   GDALAllRegister();
   // Every thread's: GDAL's errors become our one-line messages (a pushed handler is the
   // calling thread's only, and worker threads printed GDAL's own lines).

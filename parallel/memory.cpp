@@ -2,6 +2,7 @@
 // for messages.
 #include "parallel/memory.hpp"
 
+#include <malloc.h>
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 
@@ -15,7 +16,31 @@
 #include <optional>
 #include <string>
 
+// note: AddressSanitizer and ThreadSanitizer replace malloc: glibc's malloc_trim then walks
+// an arena it never set up (SEGV in mtrim, seen under ASan once the qem engine made more
+// pieces), and mallopt would tune an allocator nobody uses.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define DPTS_SANITIZED_MALLOC 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#define DPTS_SANITIZED_MALLOC 1
+#endif
+#endif
+
 namespace dpts::par {
+
+void release_free_memory() {
+#if defined(__GLIBC__) && !defined(DPTS_SANITIZED_MALLOC)
+  malloc_trim(0);
+#endif
+}
+
+void keep_freed_memory() {
+#if defined(__GLIBC__) && !defined(DPTS_SANITIZED_MALLOC)
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, 128 << 20);
+#endif
+}
 
 namespace {
 

@@ -3,7 +3,6 @@
 #pragma once
 
 #ifdef __GLIBC__
-#include <malloc.h>
 #endif
 
 #include <atomic>
@@ -15,6 +14,7 @@
 #include "core/elimination.hpp"
 #include "core/errors.hpp"
 #include "core/raster_source.hpp"
+#include "parallel/memory.hpp"
 
 namespace dpts::par {
 
@@ -30,26 +30,6 @@ inline core::HeightGrid read_window(const core::RasterSource& dem, int col0, int
   core::HeightGrid grid = dem.read(col0, row0, width, height);
   read_s = seconds_since(t0);
   return grid;
-}
-
-// Hands memory freed by a finished piece back to the system. glibc keeps freed heap memory
-// (a piece's triangulation is freed in thousands of blocks) for reuse; as kept-vertex outputs
-// accumulate between pieces, that retained memory fragments and the process grows with the
-// DEM although no more is live. Trimming after each piece keeps the footprint flat.
-// note: not under AddressSanitizer or ThreadSanitizer: they replace malloc, and glibc's
-// malloc_trim then walks an arena it never set up (SEGV in mtrim, seen under ASan once the qem
-// engine made more pieces).
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-#define DPTS_SANITIZED_MALLOC 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-#define DPTS_SANITIZED_MALLOC 1
-#endif
-#endif
-inline void release_free_memory() {
-#if defined(__GLIBC__) && !defined(DPTS_SANITIZED_MALLOC)
-  malloc_trim(0);
-#endif
 }
 
 // Progress from concurrent tasks, serialized; remembers a refusal so every task stops.
