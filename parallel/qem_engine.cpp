@@ -552,6 +552,20 @@ class QemSweep {
                  std::size_t from, std::size_t end) const {
     QemPieceMesh m;
     std::unordered_map<std::uint64_t, std::uint32_t> seam_vertex;
+    {
+      // Sized once (as in stitch): growing by doubling copied and faulted in each array twice.
+      std::size_t vertices = 0, faces = 0;
+      for (std::size_t i = from; i < end; ++i) {
+        vertices += outputs[i].cell.size();
+        faces += outputs[i].mesh.faces.size();
+      }
+      m.mesh.xyz.reserve(3 * vertices);
+      m.mesh.faces.reserve(faces);
+      m.quadrics.reserve(vertices);
+      if (positions_.projected) m.plane_xy.reserve(2 * vertices);
+      m.cell.reserve(vertices);
+      m.seam.reserve(vertices);
+    }
     double vertices = 0;
     for (std::size_t i = from; i < end; ++i) {
       vertices += static_cast<double>(pieces[i].vertices);
