@@ -2,9 +2,6 @@
 // concurrent pieces, and handing a finished piece's memory back.
 #pragma once
 
-#ifdef __GLIBC__
-#endif
-
 #include <atomic>
 #include <chrono>
 #include <mutex>

@@ -314,6 +314,21 @@ QemPieceMesh simplify_piece(const core::RasterSource& dem, const Positions& posi
   return out;
 }
 
+// What stitching outputs [first, end) appends at most: their vertices (seam vertices counted
+// in each) and faces.
+struct StitchedSize {
+  std::size_t vertices = 0, faces = 0;
+};
+StitchedSize stitched_size(const std::vector<QemPieceMesh>& outputs, std::size_t first,
+                           std::size_t end) {
+  StitchedSize n;
+  for (std::size_t i = first; i < end; ++i) {
+    n.vertices += outputs[i].cell.size();
+    n.faces += outputs[i].mesh.faces.size();
+  }
+  return n;
+}
+
 // Piece output o's vertices appended after `vertices` others, each seam vertex (by cell, in
 // seam_vertex) once, and its faces to `faces`: fresh(v) for each vertex of o that is new,
 // repeat(v, id) for a seam vertex already there as id (whose quadric takes o's).
@@ -422,7 +437,8 @@ class QemSweep {
     if (first == 0 && last && !bound_) {
       const auto t0 = std::chrono::steady_clock::now();
       // note: the runs' freed memory is not handed back (release_free_memory): the merge
-      // takes it up again (2 threads: peak 107 -> 121 MB, the merge 0.07 s sooner).
+      // takes it up again (San Gabriel to 10 %, 2 threads, with the trim after the pieces
+      // gone too: 29-32k -> 23-25k pages faulted in, peak 105 -> 119-123 MB).
       premerge(outputs, pieces);
       st_.premerge_s = seconds_since(t0);
     }
@@ -491,11 +507,9 @@ class QemSweep {
     }
     {
       // Sized once: growing by doubling would briefly hold twice the merge's largest arrays.
-      std::size_t vertices = cell_.size(), faces = mesh_.faces.size();
-      for (std::size_t i = first; i < end; ++i) {
-        vertices += outputs[i].cell.size();
-        faces += outputs[i].mesh.faces.size();
-      }
+      const StitchedSize added = stitched_size(outputs, first, end);
+      const std::size_t vertices = cell_.size() + added.vertices;
+      const std::size_t faces = mesh_.faces.size() + added.faces;
       mesh_.xyz.reserve(3 * vertices);
       mesh_.faces.reserve(faces);
       quadrics_.reserve(vertices);
@@ -552,20 +566,14 @@ class QemSweep {
                  std::size_t from, std::size_t end) const {
     QemPieceMesh m;
     std::unordered_map<std::uint64_t, std::uint32_t> seam_vertex;
-    {
-      // Sized once (as in stitch): growing by doubling copied and faulted in each array twice.
-      std::size_t vertices = 0, faces = 0;
-      for (std::size_t i = from; i < end; ++i) {
-        vertices += outputs[i].cell.size();
-        faces += outputs[i].mesh.faces.size();
-      }
-      m.mesh.xyz.reserve(3 * vertices);
-      m.mesh.faces.reserve(faces);
-      m.quadrics.reserve(vertices);
-      if (positions_.projected) m.plane_xy.reserve(2 * vertices);
-      m.cell.reserve(vertices);
-      m.seam.reserve(vertices);
-    }
+    // Sized once (as in stitch): growing by doubling copied and faulted in each array twice.
+    const StitchedSize size = stitched_size(outputs, from, end);
+    m.mesh.xyz.reserve(3 * size.vertices);
+    m.mesh.faces.reserve(size.faces);
+    m.quadrics.reserve(size.vertices);
+    if (positions_.projected) m.plane_xy.reserve(2 * size.vertices);
+    m.cell.reserve(size.vertices);
+    m.seam.reserve(size.vertices);
     double vertices = 0;
     for (std::size_t i = from; i < end; ++i) {
       vertices += static_cast<double>(pieces[i].vertices);
