@@ -51,6 +51,8 @@ const Setup* setup() {
       }
       out->mesh.faces = grid.faces;
       dpts::core::fix_orientation(out->mesh);
+      // note: as dpts-eval orders T's vertices (api/evaluation.cpp).
+      dpts::core::order_vertices_spatially(out->mesh);
       const double delta = dpts::par::kDefaultDeltaFactor * dpts::core::mean_edge_length(out->mesh);
       out->graph = std::make_unique<dpts::core::SteinerGraph>(out->mesh, delta);
       out->straightened = std::make_unique<dpts::core::SteinerGraph>(

@@ -57,21 +57,42 @@ std::uint64_t spread16(std::uint64_t v) {
   return v;
 }
 
+// The box of the mesh's vertices seen from above (lo, hi) and the scale that maps it onto
+// [0, 65535]^2 (0 along an axis it has no extent in).
+struct ZFrame {
+  double lo[2], scale[2];
+  explicit ZFrame(const TriMesh& m) {
+    double hi[2];
+    for (int c = 0; c < 2; ++c) {
+      lo[c] = std::numeric_limits<double>::infinity();
+      hi[c] = -lo[c];
+    }
+    for (std::size_t v = 0; v < m.vertex_count(); ++v) {
+      for (int c = 0; c < 2; ++c) {
+        lo[c] = std::min(lo[c], m.xyz[3 * v + c]);
+        hi[c] = std::max(hi[c], m.xyz[3 * v + c]);
+      }
+    }
+    for (int c = 0; c < 2; ++c) scale[c] = hi[c] > lo[c] ? 65535.0 / (hi[c] - lo[c]) : 0.0;
+  }
+  // The Z order key of the point (x, y).
+  std::uint64_t key(double x, double y) const {
+    const double p[2] = {x, y};
+    std::uint64_t q[2];
+    for (int c = 0; c < 2; ++c) {
+      const double t = (p[c] - lo[c]) * scale[c];
+      q[c] = t > 0 ? static_cast<std::uint64_t>(std::min(t, 65535.0)) : 0;
+    }
+    return spread16(q[0]) | spread16(q[1]) << 1;
+  }
+};
+
 // The edges (each the first of its run in the sorted face edges e) in the Z order of their
 // midpoints seen from above, ties by their vertices: (order key, first face edge).
 std::vector<std::pair<std::uint64_t, std::size_t>> z_order(
     const TriMesh& m, const std::vector<std::tuple<std::uint64_t, std::uint32_t, int>>& e,
     std::size_t edge_count) {
-  double lo[2] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
-  double hi[2] = {-lo[0], -lo[1]};
-  for (std::size_t v = 0; v < m.vertex_count(); ++v) {
-    for (int c = 0; c < 2; ++c) {
-      lo[c] = std::min(lo[c], m.xyz[3 * v + c]);
-      hi[c] = std::max(hi[c], m.xyz[3 * v + c]);
-    }
-  }
-  double scale[2];
-  for (int c = 0; c < 2; ++c) scale[c] = hi[c] > lo[c] ? 65535.0 / (hi[c] - lo[c]) : 0.0;
+  const ZFrame z(m);
   std::vector<std::pair<std::uint64_t, std::size_t>> order;
   order.reserve(edge_count);
   for (std::size_t i = 0; i < e.size(); ++i) {
@@ -79,17 +100,37 @@ std::vector<std::pair<std::uint64_t, std::size_t>> z_order(
     const std::uint64_t key = std::get<0>(e[i]);
     const double* a = &m.xyz[3 * (key >> 32)];
     const double* b = &m.xyz[3 * (key & 0xFFFFFFFFu)];
-    std::uint64_t q[2];
-    for (int c = 0; c < 2; ++c) {
-      const double t = ((a[c] + b[c]) / 2 - lo[c]) * scale[c];
-      q[c] = t > 0 ? static_cast<std::uint64_t>(std::min(t, 65535.0)) : 0;
-    }
-    order.emplace_back(spread16(q[0]) | spread16(q[1]) << 1, i);
+    order.emplace_back(z.key((a[0] + b[0]) / 2, (a[1] + b[1]) / 2), i);
   }
   std::sort(order.begin(), order.end());
   return order;
 }
 }  // namespace
+
+void order_vertices_spatially(TriMesh& mesh) {
+  const std::size_t n = mesh.vertex_count();
+  std::vector<std::uint32_t> old_of;
+  {
+    const ZFrame z(mesh);
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> order(n);
+    for (std::size_t v = 0; v < n; ++v) {
+      order[v] = {z.key(mesh.xyz[3 * v], mesh.xyz[3 * v + 1]), static_cast<std::uint32_t>(v)};
+    }
+    std::sort(order.begin(), order.end());
+    old_of.resize(n);
+    for (std::size_t i = 0; i < n; ++i) old_of[i] = order[i].second;
+  }
+  std::vector<double> xyz(3 * n);
+  std::vector<std::uint32_t> new_of(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::copy_n(mesh.xyz.begin() + 3 * old_of[i], 3, xyz.begin() + 3 * i);
+    new_of[old_of[i]] = static_cast<std::uint32_t>(i);
+  }
+  mesh.xyz = std::move(xyz);
+  for (auto& f : mesh.faces) {
+    for (auto& v : f) v = new_of[v];
+  }
+}
 
 double mean_edge_length(const TriMesh& mesh) {
   const auto e = sorted_face_edges(mesh);

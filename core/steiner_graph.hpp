@@ -24,6 +24,12 @@ namespace dpts::core {
 // Mean 3D length of the mesh's edges (each undirected edge once).
 double mean_edge_length(const TriMesh& mesh);
 
+// Renumbers the mesh's vertices in the Z order of their positions seen from above (ties by
+// their old numbers), the faces following them (each keeps its place and its corners' order):
+// the same surface, whose Steiner graph's searches then read the records of a face's corners
+// near each other in memory, as they do its edges' (a DEM's grid TIN comes row by row).
+void order_vertices_spatially(TriMesh& mesh);
+
 // A point on a mesh: position (z lifted onto the face) and the face it lies in.
 struct SurfacePoint {
   double x = 0, y = 0, z = 0;

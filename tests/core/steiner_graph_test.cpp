@@ -316,3 +316,48 @@ TEST_CASE("a vertex's total angle: its corners' sum in one closed fan, -1 on the
     CHECK(g.vertex_angle(1) == -1);
   }
 }
+
+TEST_CASE("vertices in Z order: the same faces over the same points, the same distances",
+          "[core][geodesic]") {
+  const int w = 8, h = 8;
+  const double cell = 10;
+  const auto f = [](int c, int r) { return 3.0 * std::sin(0.7 * c) + 2.0 * std::cos(0.5 * r); };
+  const core::TriMesh rows = grid_mesh(w, h, cell, f);
+  core::TriMesh z = rows;
+  core::order_vertices_spatially(z);
+  REQUIRE(z.vertex_count() == rows.vertex_count());
+  REQUIRE(z.faces.size() == rows.faces.size());
+  for (std::size_t i = 0; i < rows.faces.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      for (int c = 0; c < 3; ++c) {
+        REQUIRE(z.xyz[3 * z.faces[i][k] + c] == rows.xyz[3 * rows.faces[i][k] + c]);
+      }
+    }
+  }
+  // Z order from the lowest x, y: the first four vertices are the 2 x 2 cells there (rows run
+  // downwards in y: the last two rows), the next four the block beside them in x.
+  const double y0 = -cell * (h - 1);
+  for (std::size_t v = 0; v < 8; ++v) {
+    const double x = z.xyz[3 * v], y = z.xyz[3 * v + 1];
+    CHECK(x == (v < 4 ? 0.0 : 2 * cell) + cell * static_cast<double>(v % 2));
+    CHECK(y == y0 + cell * static_cast<double>((v / 2) % 2));
+  }
+  // The same surface: the same geodesics between the same points.
+  const auto points = core::sample_uniform(rows, 6, 5);
+  const auto points_z = core::sample_uniform(z, 6, 5);
+  const std::vector<core::SurfacePoint> targets(points.begin() + 1, points.end());
+  const std::vector<core::SurfacePoint> targets_z(points_z.begin() + 1, points_z.end());
+  core::SteinerGraph g_rows(rows, 4.0), g_z(z, 4.0);
+  for (const bool anchored : {false, true}) {
+    core::GeodesicQuery q_rows(g_rows), q_z(g_z);
+    q_rows.set_anchored(anchored);
+    q_z.set_anchored(anchored);
+    std::vector<double> d_rows, d_z;
+    q_rows.distances(points[0], targets, d_rows);
+    q_z.distances(points_z[0], targets_z, d_z);
+    for (std::size_t j = 0; j < targets.size(); ++j) {
+      CHECK(points_z[j + 1].x == points[j + 1].x);
+      CHECK(d_z[j] == Approx(d_rows[j]).epsilon(1e-6));
+    }
+  }
+}
