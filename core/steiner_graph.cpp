@@ -18,16 +18,44 @@ double dist3(const double* a, const double* b) {
 }
 
 // (min, max) vertex key of every face edge, with its face and local index, sorted.
+// note: by a counting sort on the lower vertex (the faces in order, so each bucket's entries
+// come in face order), then each bucket (a vertex's few edges) sorted: the same order as one
+// sort of the tuples, in linear time (San Gabriel's T, 4.6M face edges: one sort took 0.45 s,
+// done three times, serial, before the geodesics could start).
 std::vector<std::tuple<std::uint64_t, std::uint32_t, int>> sorted_face_edges(const TriMesh& m) {
-  std::vector<std::tuple<std::uint64_t, std::uint32_t, int>> e;
-  e.reserve(3 * m.faces.size());
+  using Entry = std::tuple<std::uint64_t, std::uint32_t, int>;
+  const std::size_t nv = m.vertex_count(), n = 3 * m.faces.size();
+  auto key = [&](std::size_t f, int i) {
+    const std::uint32_t a = m.faces[f][i], b = m.faces[f][(i + 1) % 3];
+    return (std::uint64_t{std::min(a, b)} << 32) | std::max(a, b);
+  };
+  std::vector<Entry> e;
+  bool in_range = true;
+  for (const auto& t : m.faces) in_range = in_range && t[0] < nv && t[1] < nv && t[2] < nv;
+  if (!in_range) {  // the caller's error to report: sorted as they are
+    e.reserve(n);
+    for (std::uint32_t f = 0; f < m.faces.size(); ++f) {
+      for (int i = 0; i < 3; ++i) e.emplace_back(key(f, i), f, i);
+    }
+    std::sort(e.begin(), e.end());
+    return e;
+  }
+  std::vector<std::size_t> end(nv + 1, 0);
+  for (std::size_t f = 0; f < m.faces.size(); ++f) {
+    for (int i = 0; i < 3; ++i) ++end[(key(f, i) >> 32) + 1];
+  }
+  for (std::size_t v = 0; v < nv; ++v) end[v + 1] += end[v];
+  e.resize(n);
   for (std::uint32_t f = 0; f < m.faces.size(); ++f) {
     for (int i = 0; i < 3; ++i) {
-      const std::uint32_t a = m.faces[f][i], b = m.faces[f][(i + 1) % 3];
-      e.emplace_back((std::uint64_t{std::min(a, b)} << 32) | std::max(a, b), f, i);
+      const std::uint64_t k = key(f, i);
+      e[end[k >> 32]++] = Entry{k, f, i};
     }
   }
-  std::sort(e.begin(), e.end());
+  for (std::size_t v = 0, first = 0; v < nv; first = end[v++]) {
+    std::sort(e.begin() + static_cast<std::ptrdiff_t>(first),
+              e.begin() + static_cast<std::ptrdiff_t>(end[v]));
+  }
   return e;
 }
 
