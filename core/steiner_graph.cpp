@@ -29,23 +29,18 @@ std::vector<std::tuple<std::uint64_t, std::uint32_t, int>> sorted_face_edges(con
     const std::uint32_t a = m.faces[f][i], b = m.faces[f][(i + 1) % 3];
     return (std::uint64_t{std::min(a, b)} << 32) | std::max(a, b);
   };
-  std::vector<Entry> e;
-  bool in_range = true;
-  for (const auto& t : m.faces) in_range = in_range && t[0] < nv && t[1] < nv && t[2] < nv;
-  if (!in_range) {  // the caller's error to report: sorted as they are
-    e.reserve(n);
-    for (std::uint32_t f = 0; f < m.faces.size(); ++f) {
-      for (int i = 0; i < 3; ++i) e.emplace_back(key(f, i), f, i);
+  // note: every caller then reads the corners' positions: an index past them is refused here.
+  for (const auto& t : m.faces) {
+    if (t[0] >= nv || t[1] >= nv || t[2] >= nv) {
+      throw std::invalid_argument("a face's vertex index is out of range");
     }
-    std::sort(e.begin(), e.end());
-    return e;
   }
   std::vector<std::size_t> end(nv + 1, 0);
   for (std::size_t f = 0; f < m.faces.size(); ++f) {
     for (int i = 0; i < 3; ++i) ++end[(key(f, i) >> 32) + 1];
   }
   for (std::size_t v = 0; v < nv; ++v) end[v + 1] += end[v];
-  e.resize(n);
+  std::vector<Entry> e(n);
   for (std::uint32_t f = 0; f < m.faces.size(); ++f) {
     for (int i = 0; i < 3; ++i) {
       const std::uint64_t k = key(f, i);

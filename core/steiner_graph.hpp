@@ -42,8 +42,9 @@ class SteinerGraph {
   static constexpr std::uint32_t kMaxNodes = 0x7FFFFFFFu;
 
   // Builds edges, face adjacency and Steiner point positions. Throws std::invalid_argument if
-  // an edge has more than two faces, delta is not positive, or the graph would have more than
-  // kMaxNodes nodes (checked before allocating). The mesh must outlive the graph.
+  // a face's vertex index is out of range, an edge has more than two faces, delta is not
+  // positive, or the graph would have more than kMaxNodes nodes (checked before allocating).
+  // The mesh must outlive the graph.
   SteinerGraph(const TriMesh& mesh, double delta);
 
   // The graph's nodes (exact) and memory (bytes, construction's peak included) for mesh and
