@@ -27,18 +27,92 @@
 #endif
 #endif
 
+// The heap on transparent huge pages (keep_freed_memory): glibc 2.33 or later (mallinfo2), on
+// Linux.
+#if defined(__GLIBC__) && !defined(DPTS_SANITIZED_MALLOC) && defined(__linux__)
+#if __GLIBC_PREREQ(2, 33)
+#include <sys/mman.h>
+#include <sys/resource.h>
+#include <unistd.h>
+#ifdef MADV_HUGEPAGE
+#define DPTS_HUGE_HEAP 1
+#endif
+#endif
+#endif
+
 namespace dpts::par {
+
+namespace {
+
+// Blocks of this size and more are mapped on their own (keep_freed_memory).
+[[maybe_unused]] constexpr std::size_t kMapThreshold = std::size_t{32} << 20;
+
+#ifdef DPTS_HUGE_HEAP
+constexpr std::size_t kHugePage = std::size_t{2} << 20;
+constexpr std::size_t kHugeHeap = std::size_t{256} << 20;  // the heap's part on huge pages
+bool huge_heap = false;                                    // keep_freed_memory asked for it
+
+// The next kHugeHeap bytes of malloc's heap (its main arena, above the program's data) made
+// now and advised for transparent huge pages, before anything touches them (what
+// glibc.malloc.hugetlb=1 does, which only the environment sets, before the process starts).
+// The heap keeps them free at its top (M_TOP_PAD): a trim hands back only what lies above.
+// note: another thread may grow or trim the heap meanwhile (its one arena, locked): the
+// advice then covers some of its blocks too, or fails where the heap shrank; advice only.
+void reserve_huge_heap() {
+  mallopt(M_TOP_PAD, static_cast<int>(kHugeHeap));
+  const auto before = reinterpret_cast<std::uintptr_t>(sbrk(0));
+  // A block larger than the heap's free top: malloc extends the heap, by the pad more.
+  const std::size_t top = mallinfo2().keepcost;
+  if (top + kHugePage >= kMapThreshold) return;
+  // note: volatile, or the compiler drops an allocation nothing reads.
+  void* volatile block = std::malloc(top + kHugePage);
+  std::free(block);
+  const auto after = reinterpret_cast<std::uintptr_t>(sbrk(0));
+  const std::uintptr_t from = (before + kHugePage - 1) / kHugePage * kHugePage;
+  const std::uintptr_t to = after / kHugePage * kHugePage;
+  if (before != static_cast<std::uintptr_t>(-1) && to > from) {
+    madvise(reinterpret_cast<void*>(from), to - from, MADV_HUGEPAGE);
+  }
+}
+#endif
+
+}  // namespace
 
 void release_free_memory() {
 #if defined(__GLIBC__) && !defined(DPTS_SANITIZED_MALLOC)
   malloc_trim(0);
 #endif
+#ifdef DPTS_HUGE_HEAP
+  // note: the trim handed back the heap's free top, huge pages included: made again.
+  if (huge_heap) reserve_huge_heap();
+#endif
+}
+
+bool huge_page_heap() {
+#ifdef DPTS_HUGE_HEAP
+  return huge_heap;
+#else
+  return false;
+#endif
 }
 
 void keep_freed_memory() {
 #if defined(__GLIBC__) && !defined(DPTS_SANITIZED_MALLOC)
-  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_MMAP_THRESHOLD, static_cast<int>(kMapThreshold));
   mallopt(M_TRIM_THRESHOLD, 128 << 20);
+#endif
+#ifdef DPTS_HUGE_HEAP
+  // note: not under a limit of address space or data (ulimit -v, -d): the heap's free top
+  // would take kHugeHeap of it from the start.
+  for (const int resource : {RLIMIT_AS, RLIMIT_DATA}) {
+    rlimit limit{};
+    if (getrlimit(resource, &limit) != 0 || limit.rlim_cur != RLIM_INFINITY) return;
+  }
+  // One heap for every thread (glibc gives each thread an arena of its own otherwise), its
+  // next part on huge pages.
+  mallopt(M_ARENA_MAX, 1);
+  huge_heap = true;
+  reserve_huge_heap();
 #endif
 }
 
