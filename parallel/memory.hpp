@@ -29,10 +29,9 @@ void release_free_memory();
 // on its own and unmapped when freed), and free memory at the top of the heap is kept up to
 // 128 MiB. release_free_memory still hands everything free back. For executables, before their
 // threads start.
-// Also puts every thread's blocks in one heap (glibc's main arena, not one per thread), whose
-// next 256 MiB are advised for transparent huge pages before anything touches them (Linux,
-// with no limit of address space or data; the rest of the heap, and blocks mapped on their
-// own, get ordinary pages).
+// Also advises the next 256 MiB of the main thread's heap (glibc's main arena) for transparent
+// huge pages before anything touches them (Linux, with no limit of address space or data; the
+// rest of it, other threads' arenas and blocks mapped on their own get ordinary pages).
 // note: a page the system hands this process costs about 11 us to fault in on these machines
 // (a virtual machine), more than the work done on it: San Gabriel to 10 % (qem, 1 thread)
 // faulted in 28k pages, 0.21-0.28 s of system time (15 % of the CPU); 17.8k after round 11,
