@@ -1,5 +1,5 @@
 // The executables' heap (keep_freed_memory): blocks come on transparent huge pages where the
-// kernel offers them, and memory freed is kept for reuse.
+// kernel offers them, until the first trim.
 #include "parallel/memory.hpp"
 
 #include <catch2/catch.hpp>
@@ -50,4 +50,7 @@ TEST_CASE("keep_freed_memory: the heap's blocks on huge pages, where the kernel 
   // note: the block starts anywhere in a huge page; at least 10 of the 12 it spans are whole.
   CHECK(after - before >= 10 * 2048);
   CHECK(block[kBytes - 1] == 1);
+  // A trim hands the heap's top back: from then on, the heap is glibc's own.
+  dpts::par::release_free_memory();
+  CHECK_FALSE(dpts::par::huge_page_heap());
 }
