@@ -39,9 +39,9 @@ void release_free_memory();
 // 3.0-3.2k on huge pages (2.2k of them the loader's, before main).
 void keep_freed_memory();
 
-// Whether keep_freed_memory advised the heap for huge pages (not under the sanitizers, nor off
-// Linux, nor under ulimit -v or -d; the kernel may still decline them: its
-// transparent_hugepage setting "never").
+// Whether keep_freed_memory advised the heap for huge pages and no release_free_memory has
+// ended it since (never under the sanitizers, off Linux, or under ulimit -v or -d; the kernel
+// may still decline them: its transparent_hugepage setting "never").
 bool huge_page_heap();
 
 // "12.3 GB" / "456 MB": a byte count for messages.
