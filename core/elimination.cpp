@@ -272,7 +272,11 @@ struct Eliminator::Impl {
     bool closed = n_inside == n;
     std::size_t first = 0;  // first inside face of the (single) inside run
     if (closed) {
-      s.poly.assign(s.ring.begin(), s.ring.end());
+      // From the link's least id: the refill's triangles and the importance's sums then come
+      // in an order fixed by the star alone.
+      const auto least = std::min_element(s.ring.begin(), s.ring.end(), [](VertexHandle a, VertexHandle b) { return a->info().id < b->info().id; });
+      s.poly.assign(least, s.ring.end());
+      s.poly.insert(s.poly.end(), s.ring.begin(), least);
     } else {
       if (inside_runs(s, first) != 1) return kLocked;  // the footprint pinches at v
       s.poly.clear();
