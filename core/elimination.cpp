@@ -1,4 +1,4 @@
-// The elimination method on a CGAL Delaunay TIN, with VP or PLD importance
+// The elimination method on a Delaunay TIN, with VP or PLD importance
 // ("Distance Preserving Terrain Simplification", the paper in ../shared/paper, sections 3.1,
 // 4.1 and 4.2).
 //
@@ -9,16 +9,20 @@
 // vertex is removed only where the outline is straight through it and the straight edge is
 // Delaunay afterwards; once in, an edge stays Delaunay while its ends remain.
 //
-// To know the importance of a vertex before removing it, its removal is simulated: the hole
-// is refilled with the Delaunay triangulation of the link, using CGAL's own symbolically
-// perturbed in-circle test, so the simulated triangles are exactly those CGAL's remove()
-// produces (the perturbed Delaunay triangulation is unique).
+// CGAL builds the Delaunay triangulation of the grid's cells; the removals then run on a
+// flat structure of our own: each vertex's link (its neighbours counter-clockwise, the
+// infinite vertex among them on the convex hull, each with whether the face after it is in
+// the footprint), in one block of a pool. A removal refills the hole with the Delaunay
+// triangulation of the link, using CGAL's own symbolically perturbed in-circle test, so the
+// triangles are exactly those CGAL's remove() makes (the perturbed Delaunay triangulation is
+// unique), and the same refill, simulated, gives the importance before the removal. Reading a
+// link is then one block and the link's points, where CGAL's face walk took a cache miss a
+// face (perf: the walk was a third of vp's time).
 #include "core/elimination.hpp"
 
 #include <CGAL/Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Spatial_sort_traits_adapter_2.h>
-#include <CGAL/Triangulation_face_base_with_info_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 #include <CGAL/property_map.h>
 #include <CGAL/spatial_sort.h>
@@ -26,6 +30,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 
@@ -38,25 +43,38 @@ namespace dpts::core {
 namespace {
 
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
-struct FaceLabel {
-  std::int8_t inside = -1;  // 1 inside the footprint, 0 outside, -1 not yet known
-};
-// Everything the hot loops read about a vertex lives in the vertex itself (fewer cache misses).
-struct VertexInfo {
-  std::uint32_t id = 0;     // surface vertex id
-  std::uint32_t stamp = 0;  // last removal whose link held this vertex
-  std::int32_t col = 0, row = 0;
-  double z = 0;  // height, metres
-};
-using Vb = CGAL::Triangulation_vertex_base_with_info_2<VertexInfo, K>;
-using Fb = CGAL::Triangulation_face_base_with_info_2<FaceLabel, K>;
-using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
+using Vb = CGAL::Triangulation_vertex_base_with_info_2<std::uint32_t, K>;
+using Tds = CGAL::Triangulation_data_structure_2<Vb>;
 using Delaunay = CGAL::Delaunay_triangulation_2<K, Tds>;
 using VertexHandle = Delaunay::Vertex_handle;
-using FaceHandle = Delaunay::Face_handle;
 using Point = K::Point_2;
 
 constexpr double kLocked = std::numeric_limits<double>::infinity();
+
+// A link entry: the neighbour's id, and in the top bit whether the face (vertex, this
+// neighbour, the next one) is in the footprint.
+constexpr std::uint32_t kInsideBit = 0x80000000u;
+constexpr std::uint32_t kIdMask = 0x7FFFFFFFu;
+constexpr std::uint32_t kInfinite = kIdMask;  // the infinite vertex (outside the convex hull)
+
+// Everything the hot loops read about a vertex, in 32 bytes.
+struct Vertex {
+  Point p;       // frame units
+  double z = 0;  // height, metres
+  std::int32_t col = 0, row = 0;
+};
+
+// A vertex's link: in its home block, one cache line, while it has at most kHomeLinks
+// neighbours (San Gabriel to 10 %: always), else in the spill pool, the home block then
+// holding where (spill_at) and how much room (spill_capacity).
+constexpr std::uint32_t kHomeLinks = 15;
+constexpr std::uint32_t kSpilled = 0x80000000u;
+struct alignas(64) Home {
+  std::uint32_t size = 0;  // neighbours (0 once removed), with kSpilled
+  std::uint32_t e[kHomeLinks] = {};
+  std::uint64_t spill_at() const { return e[0] | std::uint64_t{e[1]} << 32; }
+  std::uint32_t spill_capacity() const { return e[2]; }
+};
 
 std::uint64_t mix_seed(std::uint64_t a, std::uint64_t b, std::uint64_t c) {
   std::uint64_t h = a * 0x9E3779B97F4A7C15ull ^ (b + 0x632BE59BD9B4E019ull) * 0xC2B2AE3D27D4EB4Full;
@@ -64,14 +82,22 @@ std::uint64_t mix_seed(std::uint64_t a, std::uint64_t b, std::uint64_t c) {
   return h ^ (h >> 29);
 }
 
-// Per-call working memory of evaluate().
+// A triangle made by a removal, counter-clockwise, and whether it is in the footprint.
+struct NewFace {
+  std::uint32_t v[3];
+  bool inside;
+};
+
+// Per-call working memory of evaluate() and remove().
 struct Scratch {
-  std::vector<VertexHandle> ring;  // link of the vertex, counter-clockwise
-  std::vector<char> inside;        // inside[j]: face ring[j] -> ring[j+1] is in the footprint
-  std::vector<VertexHandle> poly;  // polygon to refill (whole ring or the inside chain)
-  std::vector<Point3> pts;         // poly in metres
-  std::vector<LinkTriangle> tris;  // refill triangles, indices into poly
+  std::vector<std::uint32_t> ring;  // link of the vertex, counter-clockwise
+  std::vector<char> inside;         // inside[j]: face ring[j] -> ring[j+1] is in the footprint
+  std::vector<std::uint32_t> poly;  // polygon to refill (whole ring or the inside chain)
+  std::vector<Point3> pts;          // poly in metres
+  std::vector<LinkTriangle> tris;   // refill triangles, indices into poly
   std::vector<std::pair<int, int>> todo;
+  std::vector<NewFace> faces;         // a removal's new faces
+  std::vector<std::uint32_t> splice;  // a link's new stretch
 };
 
 }  // namespace
@@ -82,15 +108,16 @@ struct Eliminator::Impl {
   GridFrame frame;
   EliminationOptions options;
   std::vector<std::uint32_t> cells;        // surface vertex id -> cell index
-  std::vector<VertexHandle> handle;        // id -> vertex (null once removed)
+  std::vector<Vertex> vertex;              // id -> point, height, grid position
+  std::vector<Home> home;                  // id -> its link (see kInsideBit)
+  std::vector<std::uint32_t> spill;        // the links too long for their home block
   std::vector<double> initial;             // importance from compute_importance()
   std::vector<std::uint32_t> evaluations;  // per-vertex counter, seeds Monte Carlo VP
   // Whether a vertex's key in the heap is its importance (1) or a lower bound of it (0).
   std::vector<char> exact_key;
   IndexedMinHeap heap;
   bool heap_ready = false;
-  std::uint32_t removals = 0;  // removals so far, all eliminate() calls together
-  Delaunay dt;
+  Delaunay predicates;  // empty: its perturbed in-circle test only
   std::size_t alive = 0;
 
   double inv[2][2];  // frame (u, w) -> grid (col, row)
@@ -100,18 +127,41 @@ struct Eliminator::Impl {
     f.inverse(inv);
   }
 
-  Point3 metric(VertexHandle v) const {
+  const Point& point(std::uint32_t id) const { return vertex[id].p; }
+
+  Point3 metric(std::uint32_t id) const {
     const double s = frame.metres_per_unit;
-    return {s * v->point().x(), s * v->point().y(), v->info().z};
+    const Vertex& v = vertex[id];
+    return {s * v.p.x(), s * v.p.y(), v.z};
   }
 
-  std::int8_t label(FaceHandle f) const {
-    std::int64_t sc = 0, sr = 0;
-    for (int i = 0; i < 3; ++i) {
-      sc += f->vertex(i)->info().col;
-      sr += f->vertex(i)->info().row;
-    }
-    return footprint.contains_third(sc, sr) ? 1 : 0;
+  bool label(std::uint32_t a, std::uint32_t b, std::uint32_t c) const {
+    if (a == kInfinite || b == kInfinite || c == kInfinite) return false;
+    const std::int64_t sc = std::int64_t{vertex[a].col} + vertex[b].col + vertex[c].col;
+    const std::int64_t sr = std::int64_t{vertex[a].row} + vertex[b].row + vertex[c].row;
+    return footprint.contains_third(sc, sr);
+  }
+
+  // Whether p lies inside the circle through a, b, c (counter-clockwise), by CGAL's perturbed
+  // test (a point on the circle is inside or not as a symbolic perturbation decides). First
+  // the determinant in doubles with Shewchuk's a priori error bound ("Adaptive Precision
+  // Floating-Point Arithmetic and Fast Robust Geometric Predicates", 1997: incircle's
+  // errboundA), which settles nearly every test; CGAL's only when its sign is in doubt.
+  bool in_circle(const Point& a, const Point& b, const Point& c, const Point& p) const {
+    const double adx = a.x() - p.x(), ady = a.y() - p.y();
+    const double bdx = b.x() - p.x(), bdy = b.y() - p.y();
+    const double cdx = c.x() - p.x(), cdy = c.y() - p.y();
+    const double bc = bdx * cdy - cdx * bdy, ca = cdx * ady - adx * cdy, ab = adx * bdy - bdx * ady;
+    const double al = adx * adx + ady * ady, bl = bdx * bdx + bdy * bdy, cl = cdx * cdx + cdy * cdy;
+    const double det = al * bc + bl * ca + cl * ab;
+    const double permanent = (std::abs(bdx * cdy) + std::abs(cdx * bdy)) * al +
+                             (std::abs(cdx * ady) + std::abs(adx * cdy)) * bl +
+                             (std::abs(adx * bdy) + std::abs(bdx * ady)) * cl;
+    constexpr double kEpsilon = 0x1p-53;
+    constexpr double kBound = (10 + 96 * kEpsilon) * kEpsilon;
+    if (det > kBound * permanent) return true;
+    if (-det > kBound * permanent) return false;
+    return predicates.side_of_oriented_circle(a, b, c, p, true) == CGAL::ON_POSITIVE_SIDE;
   }
 
   // Delaunay refill of poly[lo..hi], closed by the edge poly[hi] -> poly[lo] with the
@@ -124,16 +174,13 @@ struct Eliminator::Impl {
       const auto [lo, hi] = s.todo.back();
       s.todo.pop_back();
       if (hi - lo < 2) continue;
-      const Point& a = s.poly[hi]->point();
-      const Point& b = s.poly[lo]->point();
+      const Point& a = point(s.poly[hi]);
+      const Point& b = point(s.poly[lo]);
       int best = -1;
       for (int c = lo + 1; c < hi; ++c) {
-        const Point& p = s.poly[c]->point();
+        const Point& p = point(s.poly[c]);
         if (CGAL::orientation(a, b, p) != CGAL::LEFT_TURN) continue;
-        if (best < 0 || dt.side_of_oriented_circle(a, b, s.poly[best]->point(), p, true) ==
-                            CGAL::ON_POSITIVE_SIDE) {
-          best = c;
-        }
+        if (best < 0 || in_circle(a, b, point(s.poly[best]), p)) best = c;
       }
       if (best < 0) return false;
       s.tris.push_back({hi, lo, best});
@@ -151,8 +198,8 @@ struct Eliminator::Impl {
   // circle), with a relative margin for rounding, and test the circle against the box in grid
   // space.
   bool witness_in_box(const Scratch& s, std::size_t first, const Point& pr) const {
-    const Point& pa = s.poly.front()->point();
-    const Point& pb = s.poly.back()->point();
+    const Point& pa = point(s.poly.front());
+    const Point& pb = point(s.poly.back());
     const double mx = 0.5 * (pa.x() + pb.x()), my = 0.5 * (pa.y() + pb.y());
     const double dx = pb.x() - pa.x(), dy = pb.y() - pa.y();
     const double len = std::hypot(dx, dy);
@@ -179,9 +226,9 @@ struct Eliminator::Impl {
     bound(pr);
     const std::size_t n = s.ring.size();
     for (std::size_t j = (first + s.poly.size()) % n; j != first; j = (j + 1) % n) {
-      const VertexHandle q = s.ring[j];
-      if (q == s.poly.front() || q == s.poly.back() || dt.is_infinite(q)) continue;
-      bound(q->point());
+      const std::uint32_t q = s.ring[j];
+      if (q == s.poly.front() || q == s.poly.back() || q == kInfinite) continue;
+      bound(point(q));
     }
     const double tol = 1e-7 * len;
     lo += tol, hi -= tol;
@@ -200,26 +247,27 @@ struct Eliminator::Impl {
   }
 
   // The link of v, counter-clockwise, into s.ring, and in s.inside whether each face
-  // v -> ring[j] -> ring[j+1] is in the footprint. With relabel_mark != 0, first relabels the
-  // incident faces whose three corners carry that stamp (new faces of a hole).
-  void read_ring(VertexHandle v, Scratch& s, std::uint32_t relabel_mark) {
-    s.ring.clear();
-    s.inside.clear();
-    auto fc = dt.incident_faces(v);
-    const auto done = fc;
-    do {
-      const int i = fc->index(v);
-      if (relabel_mark != 0 && fc->vertex(0)->info().stamp == relabel_mark &&
-          fc->vertex(1)->info().stamp == relabel_mark &&
-          fc->vertex(2)->info().stamp == relabel_mark && !dt.is_infinite(fc)) {
-        fc->info().inside = label(fc);
-      }
-      s.ring.push_back(fc->vertex(Delaunay::ccw(i)));
+  // v -> ring[j] -> ring[j+1] is in the footprint.
+  static std::uint32_t link_size(const Home& h) { return h.size & ~kSpilled; }
+  const std::uint32_t* link(const Home& h) const {
+    return h.size & kSpilled ? spill.data() + h.spill_at() : h.e;
+  }
+  std::uint32_t* link(Home& h) { return h.size & kSpilled ? spill.data() + h.spill_at() : h.e; }
+
+  void read_ring(std::uint32_t v, Scratch& s) const {
+    const Home& h = home[v];
+    const std::uint32_t* e = link(h);
+    const std::uint32_t size = link_size(h);
+    s.ring.resize(size);
+    s.inside.resize(size);
+    for (std::uint32_t j = 0; j < size; ++j) {
+      const std::uint32_t id = e[j] & kIdMask;
+      s.ring[j] = id;
+      s.inside[j] = (e[j] & kInsideBit) != 0;
       // note: the ring's points are read next (the refill's predicates, the star's heights),
       // each vertex's first touch a cache miss: asked for now, all of them at once.
-      __builtin_prefetch(&s.ring.back()->point());
-      s.inside.push_back(!dt.is_infinite(fc) && fc->info().inside == 1);
-    } while (++fc != done);
+      if (id != kInfinite) __builtin_prefetch(&vertex[id]);
+    }
   }
 
   // Number of runs of inside faces round the ring (0 when all or none are inside), and the
@@ -241,30 +289,38 @@ struct Eliminator::Impl {
   }
 
   // v's removal for the log: on the outline, the ends of the inside run of faces round it.
-  Removal removal(VertexHandle v, Scratch& s) {
+  Removal removal(std::uint32_t v, Scratch& s) const {
     Removal r;
-    r.cell = cells[v->info().id];
-    read_ring(v, s, 0);
+    r.cell = cells[v];
+    read_ring(v, s);
     std::size_t first = 0;
     if (inside_runs(s, first) > 0) {
       r.outline = true;
-      r.next = cells[s.ring[first]->info().id];
-      r.prev = cells[s.ring[run_end(s, first)]->info().id];
+      r.next = cells[s.ring[first]];
+      r.prev = cells[s.ring[run_end(s, first)]];
     }
     return r;
   }
 
-  // Importance of v, or kLocked when v must stay (a corner or bend of the outline, or an
-  // outline vertex whose removal would change the footprint). With relabel_mark != 0, first
-  // relabels the incident faces whose three corners carry that stamp (new faces of a hole).
-  // With deferred given and exact VP, gives vp_volume_bound (cheaper, no more than the
-  // importance) instead when that is above defer_above, and says so in *deferred.
-  double evaluate(VertexHandle v, Scratch& s, std::uint32_t relabel_mark = 0,
-                  double defer_above = 0, bool* deferred = nullptr) {
-    if (deferred) *deferred = false;
-    read_ring(v, s, relabel_mark);
+  // The polygon of a closed star (after read_ring): the whole link, from its least id, so
+  // that the refill's triangles and the importance's sums come in an order fixed by the star.
+  static void closed_polygon(Scratch& s) {
     const std::size_t n = s.ring.size();
-    if (!options.pinned.empty() && options.pinned[cells[v->info().id]]) return kLocked;
+    std::size_t least = 0;
+    for (std::size_t j = 1; j < n; ++j) least = s.ring[j] < s.ring[least] ? j : least;
+    s.poly.resize(n);
+    for (std::size_t j = 0; j < n; ++j) s.poly[j] = s.ring[(least + j) % n];
+  }
+
+  // Importance of v, or kLocked when v must stay (a corner or bend of the outline, or an
+  // outline vertex whose removal would change the footprint). With deferred given and exact
+  // VP, gives vp_volume_bound (cheaper, no more than the importance) instead when that is
+  // above defer_above, and says so in *deferred.
+  double evaluate(std::uint32_t v, Scratch& s, double defer_above = 0, bool* deferred = nullptr) {
+    if (deferred) *deferred = false;
+    if (!options.pinned.empty() && options.pinned[cells[v]]) return kLocked;
+    read_ring(v, s);
+    const std::size_t n = s.ring.size();
     const std::size_t n_inside =
         static_cast<std::size_t>(std::count(s.inside.begin(), s.inside.end(), 1));
     if (n_inside == 0) return kLocked;
@@ -272,11 +328,7 @@ struct Eliminator::Impl {
     bool closed = n_inside == n;
     std::size_t first = 0;  // first inside face of the (single) inside run
     if (closed) {
-      // From the link's least id: the refill's triangles and the importance's sums then come
-      // in an order fixed by the star alone.
-      const auto least = std::min_element(s.ring.begin(), s.ring.end(), [](VertexHandle a, VertexHandle b) { return a->info().id < b->info().id; });
-      s.poly.assign(least, s.ring.end());
-      s.poly.insert(s.poly.end(), s.ring.begin(), least);
+      closed_polygon(s);
     } else {
       if (inside_runs(s, first) != 1) return kLocked;  // the footprint pinches at v
       s.poly.clear();
@@ -284,11 +336,12 @@ struct Eliminator::Impl {
       for (std::size_t j = first; j != end; j = (j + 1) % n) s.poly.push_back(s.ring[j]);
       s.poly.push_back(s.ring[end]);
       // The outline runs a -> v -> b; it must be straight (in grid space) through v.
-      const VertexInfo &a = s.poly.front()->info(), &b = s.poly.back()->info(), &c = v->info();
+      const Vertex &a = vertex[s.poly.front()], &b = vertex[s.poly.back()], &c = vertex[v];
       const std::int64_t ax = a.col - c.col, ay = a.row - c.row;
       const std::int64_t bx = b.col - c.col, by = b.row - c.row;
       if (ax * by - ay * bx != 0 || ax * bx + ay * by >= 0) return kLocked;
-      if (options.outline_chord_ok && !options.outline_chord_ok(cells[a.id], cells[b.id])) {
+      if (options.outline_chord_ok &&
+          !options.outline_chord_ok(cells[s.poly.front()], cells[s.poly.back()])) {
         return kLocked;
       }
     }
@@ -299,27 +352,24 @@ struct Eliminator::Impl {
     if (!closed) {
       // The straight outline edge a-b must be Delaunay after the removal: no link vertex
       // beyond it may lie in the circle of its inner triangle.
-      const Point& pa = s.poly.front()->point();
-      const Point& pb = s.poly.back()->point();
-      const Point& pr = s.poly[s.tris.front()[2]]->point();
+      const Point& pa = point(s.poly.front());
+      const Point& pb = point(s.poly.back());
+      const Point& pr = point(s.poly[s.tris.front()[2]]);
       for (std::size_t j = (first + s.poly.size()) % n; j != first; j = (j + 1) % n) {
-        const VertexHandle q = s.ring[j];
-        if (q == s.poly.front() || q == s.poly.back() || dt.is_infinite(q)) continue;
-        if (dt.side_of_oriented_circle(pb, pa, pr, q->point(), true) == CGAL::ON_POSITIVE_SIDE) {
-          return kLocked;
-        }
+        const std::uint32_t q = s.ring[j];
+        if (q == s.poly.front() || q == s.poly.back() || q == kInfinite) continue;
+        if (in_circle(pb, pa, pr, point(q))) return kLocked;
       }
       if (options.chord_box && !witness_in_box(s, first, pr)) return kLocked;
     }
 
     s.pts.clear();
-    for (const VertexHandle& p : s.poly) s.pts.push_back(metric(p));
+    for (const std::uint32_t p : s.poly) s.pts.push_back(metric(p));
     const Star star{metric(v), s.pts.data(), s.pts.size(), closed};
     if (options.importance == Importance::pld) return pld_importance(star);
     if (options.vp_volume == VolumeMethod::monte_carlo) {
-      const std::uint32_t id = v->info().id;
       return vp_volume_monte_carlo(star, s.tris, options.vp_samples,
-                                   mix_seed(options.seed, cells[id], evaluations[id]++));
+                                   mix_seed(options.seed, cells[v], evaluations[v]++));
     }
     if (deferred) {
       const double bound = vp_volume_bound(star, s.tris);
@@ -336,6 +386,114 @@ struct Eliminator::Impl {
     return options.lazy_vp && options.importance == Importance::vp &&
            options.vp_volume == VolumeMethod::exact;
   }
+
+  // The refill's triangles (s.tris over s.poly) appended to s.faces, labelled.
+  void add_refill(Scratch& s) const {
+    for (const LinkTriangle& t : s.tris) {
+      const std::uint32_t a = s.poly[t[0]], b = s.poly[t[1]], c = s.poly[t[2]];
+      s.faces.push_back({{a, b, c}, label(a, b, c)});
+    }
+  }
+
+  // Removes v (its importance finite, so its removal keeps the footprint): the hole is
+  // refilled as CGAL's remove() would, and each link vertex's link has v replaced by its new
+  // neighbours. On the outline, the new outline edge a-b is Delaunay (evaluate() checked), so
+  // the hole splits along it into the inside run's polygon and the outer one (on the convex
+  // hull, a single face with the infinite vertex).
+  void remove(std::uint32_t v, Scratch& s) {
+    read_ring(v, s);
+    const std::size_t n = s.ring.size();
+    s.faces.clear();
+    std::size_t first = 0;
+    if (inside_runs(s, first) == 0) {
+      closed_polygon(s);
+      if (!refill(s)) throw std::logic_error("elimination: a removed vertex's hole is degenerate");
+      add_refill(s);
+    } else {
+      const std::size_t end = run_end(s, first);
+      s.poly.clear();
+      for (std::size_t j = first; j != end; j = (j + 1) % n) s.poly.push_back(s.ring[j]);
+      s.poly.push_back(s.ring[end]);
+      if (!refill(s)) throw std::logic_error("elimination: a removed vertex's hole is degenerate");
+      add_refill(s);
+      s.poly.clear();
+      for (std::size_t j = end; j != first; j = (j + 1) % n) s.poly.push_back(s.ring[j]);
+      s.poly.push_back(s.ring[first]);
+      if (std::find(s.poly.begin(), s.poly.end(), kInfinite) != s.poly.end()) {
+        // On the hull, the outline straight through v: a and b are its hull neighbours.
+        if (s.poly.size() != 3)
+          throw std::logic_error("elimination: a hull vertex's link is not simple");
+        s.faces.push_back({{s.poly[0], s.poly[1], s.poly[2]}, false});
+      } else {
+        if (!refill(s))
+          throw std::logic_error("elimination: a removed vertex's hole is degenerate");
+        add_refill(s);
+      }
+    }
+    for (std::size_t j = 0; j < n; ++j) {
+      if (s.ring[j] != kInfinite) splice(s.ring[j], v, s);
+    }
+    home[v] = Home();
+    --alive;
+  }
+
+  // In u's link, v replaced by u's neighbours among the new faces: u's link reads ..., c, v,
+  // d, ... and now reads c, (the new ones), d, the faces between them the new faces round u.
+  void splice(std::uint32_t u, std::uint32_t v, Scratch& s) {
+    Home& h = home[u];
+    std::uint32_t* e = link(h);
+    const std::uint32_t n = link_size(h);
+    std::uint32_t p = 0;
+    while ((e[p] & kIdMask) != v) ++p;
+    const std::uint32_t before = (p + n - 1) % n;
+    const std::uint32_t d = e[(p + 1) % n] & kIdMask;
+    // Round u from c: each new face u -> c -> next gives c's flag and the next neighbour.
+    std::uint32_t c = e[before] & kIdMask;
+    s.splice.clear();
+    for (;;) {
+      const NewFace* f = nullptr;
+      int k = 0;
+      for (const NewFace& g : s.faces) {
+        for (k = 0; k < 3 && !(g.v[k] == u && g.v[(k + 1) % 3] == c); ++k) {
+        }
+        if (k < 3) {
+          f = &g;
+          break;
+        }
+      }
+      if (!f || s.splice.size() > s.faces.size()) {
+        throw std::logic_error("elimination: a hole's faces do not close round its link");
+      }
+      const std::uint32_t flag = f->inside ? kInsideBit : 0;
+      if (s.splice.empty()) {
+        e[before] = c | flag;
+      } else {
+        s.splice.back() = c | flag;
+      }
+      const std::uint32_t next = f->v[(k + 2) % 3];
+      if (next == d) break;
+      s.splice.push_back(next);
+      c = next;
+    }
+    // v's entry becomes the new stretch.
+    const std::uint32_t size = n - 1 + static_cast<std::uint32_t>(s.splice.size());
+    const std::uint32_t capacity = h.size & kSpilled ? h.spill_capacity() : kHomeLinks;
+    if (size > capacity) {
+      const std::uint32_t room = std::max(2 * capacity, size + 4);
+      const std::uint64_t at = spill.size();
+      spill.resize(at + room);
+      e = link(h);  // the spill may have moved
+      std::copy_n(e, n, spill.data() + at);
+      h.size = n | kSpilled;
+      h.e[0] = static_cast<std::uint32_t>(at);
+      h.e[1] = static_cast<std::uint32_t>(at >> 32);
+      h.e[2] = room;
+      e = spill.data() + at;
+    }
+    std::memmove(e + p + s.splice.size(), e + p + 1, (n - p - 1) * sizeof *e);
+    std::copy(s.splice.begin(), s.splice.end(), e + p);
+    h.size = size | (h.size & kSpilled);
+  }
 };
 
 Eliminator::Eliminator(const HeightGrid& grid, const GridFrame& frame,
@@ -346,55 +504,87 @@ Eliminator::Eliminator(const HeightGrid& grid, const GridFrame& frame,
   if (m.cells.size() < 3) {
     throw std::invalid_argument(kNothingToTriangulate);
   }
+  if (m.cells.size() >= kInfinite) {
+    throw std::invalid_argument("more than 2^31 - 2 valid cells: too many for vp and pld");
+  }
+  const std::size_t n = m.cells.size();
+  m.vertex.resize(n);
   std::vector<Point> points;
-  std::vector<VertexInfo> infos;
-  points.reserve(m.cells.size());
-  infos.reserve(m.cells.size());
-  for (std::uint32_t id = 0; id < m.cells.size(); ++id) {
-    VertexInfo info;
-    info.id = id;
-    info.col = static_cast<std::int32_t>(m.cells[id] % grid.width);
-    info.row = static_cast<std::int32_t>(m.cells[id] / grid.width);
-    info.z = grid.z[m.cells[id]];
-    points.emplace_back(frame.u(info.col, info.row), frame.w(info.col, info.row));
-    infos.push_back(info);
+  points.reserve(n);
+  for (std::uint32_t id = 0; id < n; ++id) {
+    Vertex& v = m.vertex[id];
+    v.col = static_cast<std::int32_t>(m.cells[id] % grid.width);
+    v.row = static_cast<std::int32_t>(m.cells[id] / grid.width);
+    v.z = grid.z[m.cells[id]];
+    v.p = Point(frame.u(v.col, v.row), frame.w(v.col, v.row));
+    points.push_back(v.p);
   }
   // CGAL's range insertion with info (Delaunay_triangulation_2::insert_with_info), written
   // out so that progress can stop it: the same spatial sort and hinted insertions, so the
   // same triangulation (on a grid, cocircular points make it depend on the order).
-  std::vector<std::size_t> order(points.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  using Traits = CGAL::Spatial_sort_traits_adapter_2<K, CGAL::Pointer_property_map<Point>::type>;
-  CGAL::spatial_sort(order.begin(), order.end(),
-                     Traits(CGAL::make_property_map(points), m.dt.geom_traits()));
-  Delaunay::Face_handle hint;
-  for (std::size_t k = 0; k < order.size(); ++k) {
-    if (k % 65536 == 65535 && progress &&
-        !progress(static_cast<double>(k) / static_cast<double>(order.size()), "triangulate")) {
-      throw Cancelled();
-    }
-    const VertexHandle v = m.dt.insert(points[order[k]], hint);
-    if (v != VertexHandle()) {
-      v->info() = infos[order[k]];
-      hint = v->face();
+  Delaunay dt;
+  {
+    std::vector<std::size_t> order(n);
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    using Traits = CGAL::Spatial_sort_traits_adapter_2<K, CGAL::Pointer_property_map<Point>::type>;
+    CGAL::spatial_sort(order.begin(), order.end(),
+                       Traits(CGAL::make_property_map(points), dt.geom_traits()));
+    Delaunay::Face_handle hint;
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      if (k % 65536 == 65535 && progress &&
+          !progress(static_cast<double>(k) / static_cast<double>(order.size()), "triangulate")) {
+        throw Cancelled();
+      }
+      const VertexHandle v = dt.insert(points[order[k]], hint);
+      if (v != VertexHandle()) {
+        v->info() = static_cast<std::uint32_t>(order[k]);
+        hint = v->face();
+      }
     }
   }
   points = {};
-  infos = {};
-  order = {};
-  if (m.dt.dimension() < 2) throw std::invalid_argument("all valid cells are collinear");
-  m.handle.assign(m.cells.size(), VertexHandle());
-  for (auto v = m.dt.finite_vertices_begin(); v != m.dt.finite_vertices_end(); ++v) {
-    m.handle[v->info().id] = v;
+  if (dt.dimension() < 2) throw std::invalid_argument("all valid cells are collinear");
+  // The links, from CGAL's faces (labelled once per corner).
+  std::vector<VertexHandle> handle(n);
+  for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) {
+    handle[v->info()] = v;
   }
-  for (auto f = m.dt.finite_faces_begin(); f != m.dt.finite_faces_end(); ++f) {
-    f->info().inside = m.label(f);
+  m.home.resize(n);
+  std::vector<std::uint32_t> ring;
+  for (std::uint32_t id = 0; id < n; ++id) {
+    const VertexHandle v = handle[id];
+    if (v == VertexHandle()) continue;  // a duplicate point (not inserted)
+    ring.clear();
+    auto fc = dt.incident_faces(v);
+    const auto done = fc;
+    do {
+      const int i = fc->index(v);
+      const VertexHandle a = fc->vertex(Delaunay::ccw(i)), b = fc->vertex(Delaunay::cw(i));
+      const std::uint32_t ia = dt.is_infinite(a) ? kInfinite : a->info();
+      const std::uint32_t ib = dt.is_infinite(b) ? kInfinite : b->info();
+      ring.push_back(ia | (m.label(id, ia, ib) ? kInsideBit : 0));
+    } while (++fc != done);
+    Home& h = m.home[id];
+    if (ring.size() <= kHomeLinks) {
+      std::copy(ring.begin(), ring.end(), h.e);
+      h.size = static_cast<std::uint32_t>(ring.size());
+    } else {
+      const std::uint64_t at = m.spill.size();
+      const auto room = static_cast<std::uint32_t>(ring.size() + 4);
+      m.spill.resize(at + room);
+      std::copy(ring.begin(), ring.end(), m.spill.begin() + static_cast<std::ptrdiff_t>(at));
+      h.size = static_cast<std::uint32_t>(ring.size()) | kSpilled;
+      h.e[0] = static_cast<std::uint32_t>(at);
+      h.e[1] = static_cast<std::uint32_t>(at >> 32);
+      h.e[2] = room;
+    }
   }
-  m.alive = m.cells.size();
-  m.initial.assign(m.cells.size(), kLocked);
-  m.evaluations.assign(m.cells.size(), 0);
-  m.exact_key.assign(m.cells.size(), 1);
-  m.heap = IndexedMinHeap(m.cells.size());
+  m.alive = 0;
+  for (std::uint32_t id = 0; id < n; ++id) m.alive += m.home[id].size > 0 ? 1 : 0;
+  m.initial.assign(n, kLocked);
+  m.evaluations.assign(n, 0);
+  m.exact_key.assign(n, 1);
+  m.heap = IndexedMinHeap(n);
 }
 
 Eliminator::~Eliminator() = default;
@@ -408,7 +598,8 @@ void Eliminator::compute_importance(std::size_t begin, std::size_t end) {
   bool deferred = false;
   bool* const defer = impl_->lazy() ? &deferred : nullptr;
   for (std::size_t id = begin; id < end; ++id) {
-    impl_->initial[id] = impl_->evaluate(impl_->handle[id], scratch, 0, -1.0, defer);
+    if (impl_->home[id].size == 0) continue;
+    impl_->initial[id] = impl_->evaluate(static_cast<std::uint32_t>(id), scratch, -1.0, defer);
     impl_->exact_key[id] = !deferred;
   }
 }
@@ -420,7 +611,7 @@ void Eliminator::eliminate(std::size_t keep, const Progress& progress, std::vect
     std::vector<std::uint32_t> ids;
     std::vector<double> keys;
     for (std::uint32_t id = 0; id < m.cells.size(); ++id) {
-      if (m.handle[id] != VertexHandle() && m.initial[id] != kLocked) {
+      if (m.home[id].size > 0 && m.initial[id] != kLocked) {
         ids.push_back(id);
         keys.push_back(m.initial[id]);
       }
@@ -431,7 +622,7 @@ void Eliminator::eliminate(std::size_t keep, const Progress& progress, std::vect
   const std::size_t start = m.alive;
   const double span = start > keep ? static_cast<double>(start - keep) : 1.0;
   Scratch scratch;
-  std::vector<VertexHandle> link;
+  std::vector<std::uint32_t> link;
   std::size_t removed = 0;
   bool deferred = false;
   bool* const defer = m.lazy() ? &deferred : nullptr;
@@ -446,47 +637,35 @@ void Eliminator::eliminate(std::size_t keep, const Progress& progress, std::vect
     const std::uint32_t top = m.heap.top();
     if (!m.exact_key[top]) {
       m.exact_key[top] = 1;
-      const double importance = m.evaluate(m.handle[top], scratch);
+      const double importance = m.evaluate(top, scratch);
       assert(importance != kLocked && importance >= m.heap.top_key());
       m.heap.set(top, importance);
       continue;
     }
     const std::uint32_t id = m.heap.pop();  // top
-    const VertexHandle v = m.handle[id];
-    if (log) log->push_back(m.removal(v, scratch));
+    if (log) log->push_back(m.removal(id, scratch));
+    m.remove(id, scratch);
     link.clear();
-    auto vc = m.dt.incident_vertices(v);
-    const auto done = vc;
-    do {
-      if (!m.dt.is_infinite(vc)) link.push_back(vc);
-    } while (++vc != done);
-    m.dt.remove(v);
-    m.handle[id] = VertexHandle();
-    --m.alive;
-    // The new faces fill the hole, so all their corners are in the link. note: remove() may
-    // reuse the memory of old faces for new ones, so their labels are stale, not unset.
-    const std::uint32_t mark = ++m.removals;  // over all calls: marks never repeat
-    for (const VertexHandle& u : link) {
-      u->info().stamp = mark;
-      m.heap.prefetch_slot(u->info().id);
+    for (const std::uint32_t u : scratch.ring) {
+      if (u == kInfinite) continue;
+      link.push_back(u);
+      m.heap.prefetch_slot(u);
     }
     // note: the heap (San Gabriel: 770k entries, 12 MB) is mostly out of the caches, and its
     // slot and entry of each link vertex were the eliminator's most stalled loads: asked for
     // ahead, while the vertex's importance is computed.
-    for (const VertexHandle& u : link) {
-      m.heap.prefetch(u->info().id);
-      // note: evaluating u relabels the new faces round u before reading their labels, and
-      // every new face has a corner in the link, so all of them are relabelled in time.
+    for (const std::uint32_t u : link) {
+      m.heap.prefetch(u);
       // A bound no higher than the top's key would come up next: its importance is computed
       // now, while the star is at hand (fewer cycles than deferring it, or deferring those up
       // to twice the top's key, by cachegrind's count).
       const double importance =
-          m.evaluate(u, scratch, mark, m.heap.empty() ? 0.0 : m.heap.top_key(), defer);
-      m.exact_key[u->info().id] = !deferred;
+          m.evaluate(u, scratch, m.heap.empty() ? 0.0 : m.heap.top_key(), defer);
+      m.exact_key[u] = !deferred;
       if (importance == kLocked) {
-        m.heap.erase(u->info().id);
+        m.heap.erase(u);
       } else {
-        m.heap.set(u->info().id, importance);
+        m.heap.set(u, importance);
       }
     }
     if (++removed % 4096 == 0 && progress && !progress(removed / span, "simplify")) {
@@ -501,35 +680,40 @@ Tin Eliminator::tin() const {
   Tin tin;
   std::vector<std::uint32_t> out_index(m.cells.size(), IndexedMinHeap::kAbsent);
   for (std::uint32_t id = 0; id < m.cells.size(); ++id) {
-    if (m.handle[id] == VertexHandle()) continue;
+    if (m.home[id].size == 0) continue;
     out_index[id] = static_cast<std::uint32_t>(tin.cells.size());
     tin.cells.push_back(m.cells[id]);  // ids ascend with cells, so cells stay sorted
   }
-  for (auto f = m.dt.finite_faces_begin(); f != m.dt.finite_faces_end(); ++f) {
-    if (f->info().inside != 1) continue;
-    std::array<std::uint32_t, 3> t{out_index[f->vertex(0)->info().id],
-                                   out_index[f->vertex(1)->info().id],
-                                   out_index[f->vertex(2)->info().id]};
-    std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
-    tin.faces.push_back(t);
+  // Each inside face once, from its least corner (the faces' corners are finite).
+  for (std::uint32_t id = 0; id < m.cells.size(); ++id) {
+    const std::uint32_t* e = m.link(m.home[id]);
+    const std::uint32_t size = Impl::link_size(m.home[id]);
+    for (std::uint32_t j = 0; j < size; ++j) {
+      if (!(e[j] & kInsideBit)) continue;
+      const std::uint32_t a = e[j] & kIdMask, b = e[(j + 1) % size] & kIdMask;
+      if (a < id || b < id) continue;
+      tin.faces.push_back({out_index[id], out_index[a], out_index[b]});
+    }
   }
   std::sort(tin.faces.begin(), tin.faces.end());
   return tin;
 }
 
 const std::vector<std::uint32_t>& Eliminator::cells() const { return impl_->cells; }
-bool Eliminator::alive(std::size_t id) const { return impl_->handle[id] != VertexHandle(); }
+bool Eliminator::alive(std::size_t id) const { return impl_->home[id].size > 0; }
 
 std::vector<OutlineEdge> Eliminator::outline_edges() const {
   const Impl& m = *impl_;
   std::vector<OutlineEdge> out;
-  for (auto f = m.dt.finite_faces_begin(); f != m.dt.finite_faces_end(); ++f) {
-    if (f->info().inside != 1) continue;
-    for (int i = 0; i < 3; ++i) {
-      const FaceHandle g = f->neighbor(i);
-      if (!m.dt.is_infinite(g) && g->info().inside == 1) continue;
-      out.push_back({m.cells[f->vertex(Delaunay::ccw(i))->info().id],
-                     m.cells[f->vertex(Delaunay::cw(i))->info().id]});
+  // An inside face id -> a -> b whose neighbour across id -> a (the face before it round id)
+  // is not inside: the edge id -> a, the inside on its left.
+  for (std::uint32_t id = 0; id < m.cells.size(); ++id) {
+    const std::uint32_t* e = m.link(m.home[id]);
+    const std::uint32_t size = Impl::link_size(m.home[id]);
+    for (std::uint32_t j = 0; j < size; ++j) {
+      if ((e[j] & kInsideBit) && !(e[(j + size - 1) % size] & kInsideBit)) {
+        out.push_back({m.cells[id], m.cells[e[j] & kIdMask]});
+      }
     }
   }
   std::sort(out.begin(), out.end());

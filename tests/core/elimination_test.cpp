@@ -79,6 +79,38 @@ TEST_CASE("a plane simplifies to its four corners", "[core][simplify]") {
   test::check_tin(g, tin);
 }
 
+TEST_CASE("links longer than a vertex's home block stay Delaunay", "[core][simplify]") {
+  // Flat ground round a void, and a pinned centre amid a pinned circle of cells: VP removes
+  // the rest at no cost, and the centre ends with a neighbour for each cell of the circle,
+  // past the 15 a vertex's link holds in its own block (elimination.cpp, kHomeLinks): its
+  // link spills, and grows there.
+  const int w = 48, h = 40;
+  const auto g = test::make_grid(w, h, [](int c, int r) {
+    if (std::hypot(c - 10.0, r - 30.0) < 4.0) return kNaN;
+    return 10.0 + 1e-9 * ((c * 7 + r * 13) % 5);
+  });
+  core::EliminationOptions opt;
+  opt.importance = GENERATE(core::Importance::vp, core::Importance::pld);
+  opt.pinned.assign(static_cast<std::size_t>(w) * h, 0);
+  const int centre = 18 * w + 30;
+  opt.pinned[centre] = 1;
+  for (int k = 0; k < 40; ++k) {
+    const double t = 2 * M_PI * k / 40;
+    opt.pinned[std::lround(18 + 9 * std::sin(t)) * w + std::lround(30 + 9 * std::cos(t))] = 1;
+  }
+  par::KeepTarget target;
+  target.vertices = 4;
+  const core::Tin tin = par::simplify_dem(g, {}, opt, target, nullptr);
+  test::check_tin(g, tin);
+  const auto at = std::lower_bound(tin.cells.begin(), tin.cells.end(), centre);
+  REQUIRE((at != tin.cells.end() && *at == static_cast<std::uint32_t>(centre)));
+  const auto id = static_cast<std::uint32_t>(at - tin.cells.begin());
+  const auto faces = std::count_if(tin.faces.begin(), tin.faces.end(), [id](const auto& f) {
+    return f[0] == id || f[1] == id || f[2] == id;
+  });
+  CHECK(faces > 15);
+}
+
 TEST_CASE("corners and bends of the outline are never removed", "[core][simplify]") {
   // Asking for 3 vertices cannot be met: the outline's corners stay, and the result is the
   // smallest TIN with the same footprint.
@@ -221,9 +253,8 @@ TEST_CASE("the unsimplified TIN takes the frame's Delaunay diagonal, as grid_tin
   // A reprojected DEM's frame is sheared: Delaunay splits every square along its shorter
   // diagonal, which is NE-SW for one shear and NW-SE for the other (and for a square grid).
   const auto g = hills(20, 16);
-  const double shears[3][2][2] = {{{20.0, 0.4}, {-0.3, -31.0}},
-                                  {{20.0, -0.4}, {0.3, -31.0}},
-                                  {{30.0, 0.0}, {0.0, -30.0}}};
+  const double shears[3][2][2] = {
+      {{20.0, 0.4}, {-0.3, -31.0}}, {{20.0, -0.4}, {0.3, -31.0}}, {{30.0, 0.0}, {0.0, -30.0}}};
   for (const auto& j : shears) {
     const auto frame = core::GridFrame::from_jacobian(j);
     const std::size_t input = core::surface_cells(g).size();
