@@ -437,6 +437,173 @@ struct Eliminator::Impl {
     --alive;
   }
 
+  // Vertex id's link, counter-clockwise (entries as in Home), stored.
+  void set_link(std::uint32_t id, const std::vector<std::uint32_t>& ring) {
+    Home& h = home[id];
+    if (ring.size() <= kHomeLinks) {
+      std::copy(ring.begin(), ring.end(), h.e);
+      h.size = static_cast<std::uint32_t>(ring.size());
+      return;
+    }
+    const std::uint64_t at = spill.size();
+    const auto room = static_cast<std::uint32_t>(ring.size() + 4);
+    spill.resize(at + room);
+    std::copy(ring.begin(), ring.end(), spill.begin() + static_cast<std::ptrdiff_t>(at));
+    h.size = static_cast<std::uint32_t>(ring.size()) | kSpilled;
+    h.e[0] = static_cast<std::uint32_t>(at);
+    h.e[1] = static_cast<std::uint32_t>(at >> 32);
+    h.e[2] = room;
+  }
+
+  // The links of the Delaunay triangulation of the vertices, by CGAL's insertion.
+  void cgal_links(const Progress& progress) {
+    const std::size_t n = vertex.size();
+    // CGAL's range insertion with info (Delaunay_triangulation_2::insert_with_info), written
+    // out so that progress can stop it: the same spatial sort and hinted insertions.
+    Delaunay dt;
+    std::vector<VertexHandle> handle(n);
+    {
+      std::vector<Point> points(n);
+      for (std::size_t i = 0; i < n; ++i) points[i] = vertex[i].p;
+      std::vector<std::size_t> order(n);
+      for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+      using Traits =
+          CGAL::Spatial_sort_traits_adapter_2<K, CGAL::Pointer_property_map<Point>::type>;
+      CGAL::spatial_sort(order.begin(), order.end(),
+                         Traits(CGAL::make_property_map(points), dt.geom_traits()));
+      Delaunay::Face_handle hint;
+      for (std::size_t k = 0; k < order.size(); ++k) {
+        if (k % 65536 == 65535 && progress &&
+            !progress(static_cast<double>(k) / static_cast<double>(order.size()), "triangulate")) {
+          throw Cancelled();
+        }
+        const VertexHandle v = dt.insert(points[order[k]], hint);
+        if (v != VertexHandle()) {
+          v->info() = static_cast<std::uint32_t>(order[k]);
+          hint = v->face();
+        }
+      }
+    }
+    if (dt.dimension() < 2) throw std::invalid_argument("all valid cells are collinear");
+    for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) {
+      handle[v->info()] = v;
+    }
+    std::vector<std::uint32_t> ring;
+    for (std::uint32_t id = 0; id < n; ++id) {
+      const VertexHandle v = handle[id];
+      if (v == VertexHandle()) continue;  // a duplicate point (not inserted)
+      ring.clear();
+      auto fc = dt.incident_faces(v);
+      const auto done = fc;
+      do {
+        const int i = fc->index(v);
+        const VertexHandle a = fc->vertex(Delaunay::ccw(i)), b = fc->vertex(Delaunay::cw(i));
+        const std::uint32_t ia = dt.is_infinite(a) ? kInfinite : a->info();
+        const std::uint32_t ib = dt.is_infinite(b) ? kInfinite : b->info();
+        ring.push_back(ia | (label(id, ia, ib) ? kInsideBit : 0));
+      } while (++fc != done);
+      set_link(id, ring);
+    }
+  }
+
+  // The links of the Delaunay triangulation of a DEM whose every cell is a vertex (ids in
+  // row-major order), straight from the grid: no vertex lies in a square's circle but its
+  // corners, so each square is split along the diagonal that CGAL's perturbed in-circle test
+  // picks, and the convex hull is the grid's border. The perturbed Delaunay triangulation is
+  // unique, so this is the triangulation cgal_links() makes, in a tenth of the time. False
+  // (nothing made) where the frame's shear makes the grid's squares not Delaunay.
+  bool grid_links(const Progress& progress) {
+    const int w = grid.width, h = grid.height;
+    auto at = [w](int c, int r) { return static_cast<std::uint32_t>(r) * w + c; };
+    // main[square]: square (c, r) (corners c..c+1, r..r+1) split along (c, r) - (c+1, r+1).
+    std::vector<char> main((static_cast<std::size_t>(w) - 1) * (h - 1));
+    for (int r = 0; r + 1 < h; ++r) {
+      for (int c = 0; c + 1 < w; ++c) {
+        const Point &p00 = point(at(c, r)), &p10 = point(at(c + 1, r));
+        const Point &p01 = point(at(c, r + 1)), &p11 = point(at(c + 1, r + 1));
+        const bool ccw = CGAL::orientation(p00, p10, p11) == CGAL::LEFT_TURN;
+        const bool inside = ccw ? in_circle(p00, p10, p11, p01) : in_circle(p00, p11, p10, p01);
+        main[static_cast<std::size_t>(r) * (w - 1) + c] = inside ? 0 : 1;
+      }
+    }
+    // The grid's own edges must be Delaunay too (a frame sheared past the lattice's reduced
+    // basis makes its Delaunay edges cross squares): each against the far corner of the
+    // triangle beyond it. Else false, and nothing is made.
+    auto encircles = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t t) {
+      const bool ccw = CGAL::orientation(point(a), point(b), point(c)) == CGAL::LEFT_TURN;
+      return ccw ? in_circle(point(a), point(b), point(c), point(t))
+                 : in_circle(point(a), point(c), point(b), point(t));
+    };
+    auto is_main = [&](int c, int r) {
+      return main[static_cast<std::size_t>(r) * (w - 1) + c] != 0;
+    };
+    for (int r = 1; r + 1 < h; ++r) {  // edge (c, r) - (c+1, r), squares (c, r-1) and (c, r)
+      for (int c = 0; c + 1 < w; ++c) {
+        const std::uint32_t below = is_main(c, r) ? at(c + 1, r + 1) : at(c, r + 1);
+        const std::uint32_t above = is_main(c, r - 1) ? at(c, r - 1) : at(c + 1, r - 1);
+        if (encircles(at(c, r), at(c + 1, r), below, above)) return false;
+      }
+    }
+    for (int r = 0; r + 1 < h; ++r) {  // edge (c, r) - (c, r+1), squares (c-1, r) and (c, r)
+      for (int c = 1; c + 1 < w; ++c) {
+        const std::uint32_t right = is_main(c, r) ? at(c + 1, r + 1) : at(c + 1, r);
+        const std::uint32_t left = is_main(c - 1, r) ? at(c - 1, r) : at(c - 1, r + 1);
+        if (encircles(at(c, r), at(c, r + 1), right, left)) return false;
+      }
+    }
+    auto split_main = [&](int c, int r) {  // square (c, r), if it exists, split along main
+      return c >= 0 && r >= 0 && c + 1 < w && r + 1 < h &&
+             main[static_cast<std::size_t>(r) * (w - 1) + c] != 0;
+    };
+    auto split_anti = [&](int c, int r) {
+      return c >= 0 && r >= 0 && c + 1 < w && r + 1 < h &&
+             main[static_cast<std::size_t>(r) * (w - 1) + c] == 0;
+    };
+    // The eight directions by angle in (col, row); the frame keeps that turn or reverses it.
+    static constexpr int kDc[8] = {1, 1, 0, -1, -1, -1, 0, 1};
+    static constexpr int kDr[8] = {0, 1, 1, 1, 0, -1, -1, -1};
+    const bool reverse = frame.m[0][0] * frame.m[1][1] - frame.m[0][1] * frame.m[1][0] < 0;
+    std::vector<std::uint32_t> ring;
+    for (int r = 0; r < h; ++r) {
+      if (progress && r % std::max(1, 65536 / w) == 0 && r > 0 &&
+          !progress(static_cast<double>(r) / h, "triangulate")) {
+        throw Cancelled();
+      }
+      for (int c = 0; c < w; ++c) {
+        bool outside[8], present[8];
+        for (int k = 0; k < 8; ++k) {
+          const int nc = c + kDc[k], nr = r + kDr[k];
+          outside[k] = nc < 0 || nr < 0 || nc >= w || nr >= h;
+          present[k] = !outside[k];
+        }
+        if (present[1]) present[1] = split_main(c, r);
+        if (present[3]) present[3] = split_anti(c - 1, r);
+        if (present[5]) present[5] = split_main(c - 1, r - 1);
+        if (present[7]) present[7] = split_anti(c, r - 1);
+        // From the end of the outside arc (on the border), the infinite vertex last.
+        int start = 0;
+        bool border = false;
+        for (int k = 0; k < 8; ++k) {
+          if (outside[k] && !outside[(k + 1) % 8]) start = (k + 1) % 8, border = true;
+        }
+        ring.clear();
+        for (int j = 0; j < 8; ++j) {
+          const int k = (start + j) % 8;
+          if (present[k]) ring.push_back(at(c + kDc[k], r + kDr[k]));
+        }
+        if (border) ring.push_back(kInfinite);
+        if (reverse) std::reverse(ring.begin(), ring.end());
+        const std::uint32_t id = at(c, r);
+        const std::size_t n = ring.size();
+        for (std::size_t j = 0; j < n; ++j) {
+          if (label(id, ring[j] & kIdMask, ring[(j + 1) % n] & kIdMask)) ring[j] |= kInsideBit;
+        }
+        set_link(id, ring);
+      }
+    }
+    return true;
+  }
+
   // In u's link, v replaced by u's neighbours among the new faces: u's link reads ..., c, v,
   // d, ... and now reads c, (the new ones), d, the faces between them the new faces round u.
   void splice(std::uint32_t u, std::uint32_t v, Scratch& s) {
@@ -509,75 +676,19 @@ Eliminator::Eliminator(const HeightGrid& grid, const GridFrame& frame,
   }
   const std::size_t n = m.cells.size();
   m.vertex.resize(n);
-  std::vector<Point> points;
-  points.reserve(n);
   for (std::uint32_t id = 0; id < n; ++id) {
     Vertex& v = m.vertex[id];
     v.col = static_cast<std::int32_t>(m.cells[id] % grid.width);
     v.row = static_cast<std::int32_t>(m.cells[id] / grid.width);
     v.z = grid.z[m.cells[id]];
     v.p = Point(frame.u(v.col, v.row), frame.w(v.col, v.row));
-    points.push_back(v.p);
-  }
-  // CGAL's range insertion with info (Delaunay_triangulation_2::insert_with_info), written
-  // out so that progress can stop it: the same spatial sort and hinted insertions, so the
-  // same triangulation (on a grid, cocircular points make it depend on the order).
-  Delaunay dt;
-  {
-    std::vector<std::size_t> order(n);
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-    using Traits = CGAL::Spatial_sort_traits_adapter_2<K, CGAL::Pointer_property_map<Point>::type>;
-    CGAL::spatial_sort(order.begin(), order.end(),
-                       Traits(CGAL::make_property_map(points), dt.geom_traits()));
-    Delaunay::Face_handle hint;
-    for (std::size_t k = 0; k < order.size(); ++k) {
-      if (k % 65536 == 65535 && progress &&
-          !progress(static_cast<double>(k) / static_cast<double>(order.size()), "triangulate")) {
-        throw Cancelled();
-      }
-      const VertexHandle v = dt.insert(points[order[k]], hint);
-      if (v != VertexHandle()) {
-        v->info() = static_cast<std::uint32_t>(order[k]);
-        hint = v->face();
-      }
-    }
-  }
-  points = {};
-  if (dt.dimension() < 2) throw std::invalid_argument("all valid cells are collinear");
-  // The links, from CGAL's faces (labelled once per corner).
-  std::vector<VertexHandle> handle(n);
-  for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) {
-    handle[v->info()] = v;
   }
   m.home.resize(n);
-  std::vector<std::uint32_t> ring;
-  for (std::uint32_t id = 0; id < n; ++id) {
-    const VertexHandle v = handle[id];
-    if (v == VertexHandle()) continue;  // a duplicate point (not inserted)
-    ring.clear();
-    auto fc = dt.incident_faces(v);
-    const auto done = fc;
-    do {
-      const int i = fc->index(v);
-      const VertexHandle a = fc->vertex(Delaunay::ccw(i)), b = fc->vertex(Delaunay::cw(i));
-      const std::uint32_t ia = dt.is_infinite(a) ? kInfinite : a->info();
-      const std::uint32_t ib = dt.is_infinite(b) ? kInfinite : b->info();
-      ring.push_back(ia | (m.label(id, ia, ib) ? kInsideBit : 0));
-    } while (++fc != done);
-    Home& h = m.home[id];
-    if (ring.size() <= kHomeLinks) {
-      std::copy(ring.begin(), ring.end(), h.e);
-      h.size = static_cast<std::uint32_t>(ring.size());
-    } else {
-      const std::uint64_t at = m.spill.size();
-      const auto room = static_cast<std::uint32_t>(ring.size() + 4);
-      m.spill.resize(at + room);
-      std::copy(ring.begin(), ring.end(), m.spill.begin() + static_cast<std::ptrdiff_t>(at));
-      h.size = static_cast<std::uint32_t>(ring.size()) | kSpilled;
-      h.e[0] = static_cast<std::uint32_t>(at);
-      h.e[1] = static_cast<std::uint32_t>(at >> 32);
-      h.e[2] = room;
-    }
+  if (options.grid_triangulation && n == static_cast<std::size_t>(grid.width) * grid.height &&
+      grid.width >= 2 && grid.height >= 2) {
+    if (!m.grid_links(progress)) m.cgal_links(progress);
+  } else {
+    m.cgal_links(progress);
   }
   m.alive = 0;
   for (std::uint32_t id = 0; id < n; ++id) m.alive += m.home[id].size > 0 ? 1 : 0;

@@ -31,6 +31,10 @@ struct EliminationOptions {
   // until then the queue holds a cheap lower bound of it (core::vp_volume_bound). The
   // removals, and so the TIN, are the same either way; off only to check that.
   bool lazy_vp = true;
+  // A DEM with every cell valid: its Delaunay TIN made straight from the grid (each square
+  // split along its Delaunay diagonal) instead of by CGAL's insertion. The TIN is the same
+  // either way; off only to check that.
+  bool grid_triangulation = true;
   // Whether the outline may run straight from cell a to cell b (both on one grid line, the
   // cells between them on the outline). Null: always (the frame is the output CRS up to an
   // affine map). For a reprojected DEM, a straight grid line bends in the output CRS, and the

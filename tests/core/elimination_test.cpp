@@ -276,3 +276,47 @@ TEST_CASE("the unsimplified TIN takes the frame's Delaunay diagonal, as grid_tin
   CHECK(core::delaunay_diagonal(core::GridFrame::from_jacobian(shears[0])) !=
         core::delaunay_diagonal(core::GridFrame::from_jacobian(shears[1])));
 }
+
+TEST_CASE("a DEM with every cell valid gets CGAL's TIN straight from its grid",
+          "[core][simplify]") {
+  // Square cells (cocircular corners: the perturbed test picks the diagonal), rectangles,
+  // the shears of reprojected DEMs either way, a rotation, one without the reflection of a
+  // north-up DEM, and a shear past the lattice's reduced basis (its Delaunay edges cross
+  // squares: the grid is not used, and the TIN must still be CGAL's).
+  const double frames[7][2][2] = {{{30.0, 0.0}, {0.0, -30.0}},   {{30.0, 0.0}, {0.0, -10.0}},
+                                  {{20.0, 0.4}, {-0.3, -31.0}},  {{20.0, -0.4}, {0.3, -31.0}},
+                                  {{26.0, 15.0}, {15.0, -26.0}}, {{30.0, 0.0}, {0.0, 30.0}},
+                                  {{10.0, 25.0}, {0.0, -10.0}}};
+  const auto g = test::make_grid(23, 17, [](int c, int r) {
+    const double noise = std::fmod(std::sin(c * 12.9898 + r * 78.233) * 43758.5453, 1.0);
+    return 100.0 + 5.0 * noise + 0.3 * c - 0.2 * r;
+  });
+  for (const auto& j : frames) {
+    const auto frame = core::GridFrame::from_jacobian(j);
+    for (const auto kind : {core::Importance::vp, core::Importance::pld}) {
+      auto run = [&](bool from_grid, std::size_t keep) {
+        core::EliminationOptions opt;
+        opt.importance = kind;
+        opt.grid_triangulation = from_grid;
+        core::Eliminator e(g, frame, opt);
+        e.compute_importance(0, e.vertex_count());
+        std::vector<core::Removal> log;
+        e.eliminate(keep, nullptr, &log);
+        return std::make_pair(e.tin(), log);
+      };
+      for (const std::size_t keep : {std::size_t{23 * 17}, std::size_t{40}}) {
+        const auto [grid, grid_log] = run(true, keep);
+        const auto [cgal, cgal_log] = run(false, keep);
+        INFO("frame " << j[0][0] << " " << j[0][1] << " " << j[1][0] << " " << j[1][1] << ", keep "
+                      << keep);
+        CHECK(grid.cells == cgal.cells);
+        CHECK(grid.faces == cgal.faces);
+        REQUIRE(grid_log.size() == cgal_log.size());
+        for (std::size_t k = 0; k < grid_log.size(); ++k) {
+          CHECK(grid_log[k].cell == cgal_log[k].cell);
+        }
+        test::check_tin(g, grid, frame);
+      }
+    }
+  }
+}
