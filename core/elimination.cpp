@@ -99,8 +99,10 @@ struct Scratch {
   std::vector<Point3> pts;          // poly in metres
   std::vector<LinkTriangle> tris;   // refill triangles, indices into poly
   std::vector<std::pair<int, int>> todo;
-  std::vector<NewFace> faces;         // a removal's new faces
-  std::vector<std::uint32_t> splice;  // a link's new stretch
+  std::vector<std::uint32_t> outer;      // an outline vertex's outer polygon, b .. a
+  std::vector<LinkTriangle> outer_tris;  // its refill
+  std::vector<NewFace> faces;            // a removal's new faces
+  std::vector<std::uint32_t> splice;     // a link's new stretch
 };
 
 }  // namespace
@@ -168,23 +170,25 @@ struct Eliminator::Impl {
   // Delaunay refill of poly[lo..hi], closed by the edge poly[hi] -> poly[lo] with the
   // polygon on its left. Appends counter-clockwise triangles; the first one appended is the
   // one on the closing edge. Returns false on a degenerate (collinear) polygon.
-  bool refill(Scratch& s) const {
-    s.tris.clear();
-    s.todo.assign(1, {0, static_cast<int>(s.poly.size()) - 1});
+  bool refill(Scratch& s) const { return refill(s.poly, s.tris, s); }
+  bool refill(const std::vector<std::uint32_t>& poly, std::vector<LinkTriangle>& tris,
+              Scratch& s) const {
+    tris.clear();
+    s.todo.assign(1, {0, static_cast<int>(poly.size()) - 1});
     while (!s.todo.empty()) {
       const auto [lo, hi] = s.todo.back();
       s.todo.pop_back();
       if (hi - lo < 2) continue;
-      const Point& a = point(s.poly[hi]);
-      const Point& b = point(s.poly[lo]);
+      const Point& a = point(poly[hi]);
+      const Point& b = point(poly[lo]);
       int best = -1;
       for (int c = lo + 1; c < hi; ++c) {
-        const Point& p = point(s.poly[c]);
+        const Point& p = point(poly[c]);
         if (CGAL::orientation(a, b, p) != CGAL::LEFT_TURN) continue;
-        if (best < 0 || in_circle(a, b, point(s.poly[best]), p)) best = c;
+        if (best < 0 || in_circle(a, b, point(poly[best]), p)) best = c;
       }
       if (best < 0) return false;
-      s.tris.push_back({hi, lo, best});
+      tris.push_back({hi, lo, best});
       s.todo.push_back({best, hi});
       s.todo.push_back({lo, best});
     }
@@ -317,6 +321,23 @@ struct Eliminator::Impl {
     for (std::size_t j = 0; j < n; ++j) s.poly[j] = s.ring[(least + j) % n];
   }
 
+  // The outer side of an outline vertex's hole (after read_ring; the inside run from first):
+  // the link from b round to a, into s.outer, and its refill into s.outer_tris (none on the
+  // convex hull, where it is b, the infinite vertex, a). False where it cannot be refilled
+  // (the vertex then stays).
+  bool outer_refill(Scratch& s, std::size_t first) const {
+    const std::size_t n = s.ring.size(), end = run_end(s, first);
+    s.outer.clear();
+    for (std::size_t j = end; j != first; j = (j + 1) % n) s.outer.push_back(s.ring[j]);
+    s.outer.push_back(s.ring[first]);
+    s.outer_tris.clear();
+    if (std::find(s.outer.begin(), s.outer.end(), kInfinite) != s.outer.end()) {
+      // On the hull with the outline straight through v, a and b are its hull neighbours.
+      return s.outer.size() == 3;
+    }
+    return refill(s.outer, s.outer_tris, s);
+  }
+
   // Importance of v, or kLocked when v must stay (a corner or bend of the outline, or an
   // outline vertex whose removal would change the footprint). With deferred given and exact
   // VP, gives vp_volume_bound (cheaper, no more than the importance) instead when that is
@@ -366,6 +387,7 @@ struct Eliminator::Impl {
         if (in_circle(pb, pa, pr, point(q))) return kLocked;
       }
       if (options.chord_box && !witness_in_box(s, first, pr)) return kLocked;
+      if (!outer_refill(s, first)) return kLocked;
     }
 
     s.pts.clear();
@@ -424,20 +446,17 @@ struct Eliminator::Impl {
       s.poly.clear();
       for (std::size_t j = first; j != end; j = (j + 1) % n) s.poly.push_back(s.ring[j]);
       s.poly.push_back(s.ring[end]);
-      if (!refill(s)) throw std::logic_error("elimination: a removed vertex's hole is degenerate");
+      if (!refill(s) || !outer_refill(s, first)) {
+        throw std::logic_error("elimination: a removed vertex's hole is degenerate");
+      }
       add_refill(s);
-      s.poly.clear();
-      for (std::size_t j = end; j != first; j = (j + 1) % n) s.poly.push_back(s.ring[j]);
-      s.poly.push_back(s.ring[first]);
-      if (std::find(s.poly.begin(), s.poly.end(), kInfinite) != s.poly.end()) {
-        // On the hull, the outline straight through v: a and b are its hull neighbours.
-        if (s.poly.size() != 3)
-          throw std::logic_error("elimination: a hull vertex's link is not simple");
-        s.faces.push_back({{s.poly[0], s.poly[1], s.poly[2]}, false});
+      if (s.outer_tris.empty()) {
+        s.faces.push_back({{s.outer[0], s.outer[1], s.outer[2]}, false});
       } else {
-        if (!refill(s))
-          throw std::logic_error("elimination: a removed vertex's hole is degenerate");
-        add_refill(s);
+        for (const LinkTriangle& t : s.outer_tris) {
+          const std::uint32_t p = s.outer[t[0]], q = s.outer[t[1]], r = s.outer[t[2]];
+          s.faces.push_back({{p, q, r}, label(p, q, r)});
+        }
       }
     }
     for (std::size_t j = 0; j < n; ++j) {
