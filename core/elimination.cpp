@@ -467,18 +467,18 @@ struct Eliminator::Impl {
   }
 
   // Vertex id's link, counter-clockwise (entries as in Home), stored.
-  void set_link(std::uint32_t id, const std::vector<std::uint32_t>& ring) {
+  void set_link(std::uint32_t id, const std::uint32_t* ring, std::size_t size) {
     Home& h = home[id];
-    if (ring.size() <= kHomeLinks) {
-      std::copy(ring.begin(), ring.end(), h.e);
-      h.size = static_cast<std::uint32_t>(ring.size()) | kExactKey;
+    if (size <= kHomeLinks) {
+      std::copy_n(ring, size, h.e);
+      h.size = static_cast<std::uint32_t>(size) | kExactKey;
       return;
     }
     const std::uint64_t at = spill.size();
-    const auto room = static_cast<std::uint32_t>(ring.size() + 4);
+    const auto room = static_cast<std::uint32_t>(size + 4);
     spill.resize(at + room);
-    std::copy(ring.begin(), ring.end(), spill.begin() + static_cast<std::ptrdiff_t>(at));
-    h.size = static_cast<std::uint32_t>(ring.size()) | kSpilled | kExactKey;
+    std::copy_n(ring, size, spill.data() + at);
+    h.size = static_cast<std::uint32_t>(size) | kSpilled | kExactKey;
     h.e[0] = static_cast<std::uint32_t>(at);
     h.e[1] = static_cast<std::uint32_t>(at >> 32);
     h.e[2] = room;
@@ -487,51 +487,63 @@ struct Eliminator::Impl {
   // The links of the Delaunay triangulation of the vertices, by CGAL's insertion.
   void cgal_links(const Progress& progress) {
     const std::size_t n = vertex.size();
-    // CGAL's range insertion with info (Delaunay_triangulation_2::insert_with_info), written
-    // out so that progress can stop it: the same spatial sort and hinted insertions.
-    Delaunay dt;
-    std::vector<VertexHandle> handle(n);
+    // The links, side by side as CGAL gives them, then CGAL's triangulation freed, then the
+    // home blocks: its memory and theirs are never held at once (peak -9 % on kilauea).
+    std::vector<std::uint64_t> start(n + 1, 0);
+    std::vector<std::uint32_t> links;
+    links.reserve(7 * n);
     {
-      std::vector<Point> points(n);
-      for (std::size_t i = 0; i < n; ++i) points[i] = vertex[i].p;
-      std::vector<std::size_t> order(n);
-      for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-      using Traits =
-          CGAL::Spatial_sort_traits_adapter_2<K, CGAL::Pointer_property_map<Point>::type>;
-      CGAL::spatial_sort(order.begin(), order.end(),
-                         Traits(CGAL::make_property_map(points), dt.geom_traits()));
-      Delaunay::Face_handle hint;
-      for (std::size_t k = 0; k < order.size(); ++k) {
-        if (k % 65536 == 65535 && progress &&
-            !progress(static_cast<double>(k) / static_cast<double>(order.size()), "triangulate")) {
-          throw Cancelled();
-        }
-        const VertexHandle v = dt.insert(points[order[k]], hint);
-        if (v != VertexHandle()) {
-          v->info() = static_cast<std::uint32_t>(order[k]);
-          hint = v->face();
+      // CGAL's range insertion with info (Delaunay_triangulation_2::insert_with_info), written
+      // out so that progress can stop it: the same spatial sort and hinted insertions.
+      Delaunay dt;
+      std::vector<VertexHandle> handle(n);
+      {
+        std::vector<Point> points(n);
+        for (std::size_t i = 0; i < n; ++i) points[i] = vertex[i].p;
+        std::vector<std::size_t> order(n);
+        for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+        using Traits =
+            CGAL::Spatial_sort_traits_adapter_2<K, CGAL::Pointer_property_map<Point>::type>;
+        CGAL::spatial_sort(order.begin(), order.end(),
+                           Traits(CGAL::make_property_map(points), dt.geom_traits()));
+        Delaunay::Face_handle hint;
+        for (std::size_t k = 0; k < order.size(); ++k) {
+          if (k % 65536 == 65535 && progress &&
+              !progress(static_cast<double>(k) / static_cast<double>(order.size()),
+                        "triangulate")) {
+            throw Cancelled();
+          }
+          const VertexHandle v = dt.insert(points[order[k]], hint);
+          if (v != VertexHandle()) {
+            v->info() = static_cast<std::uint32_t>(order[k]);
+            hint = v->face();
+          }
         }
       }
+      if (dt.dimension() < 2) throw std::invalid_argument("all valid cells are collinear");
+      for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) {
+        handle[v->info()] = v;
+      }
+      for (std::uint32_t id = 0; id < n; ++id) {
+        start[id] = links.size();
+        const VertexHandle v = handle[id];
+        if (v == VertexHandle()) continue;  // a duplicate point (not inserted)
+        auto fc = dt.incident_faces(v);
+        const auto done = fc;
+        do {
+          const int i = fc->index(v);
+          const VertexHandle a = fc->vertex(Delaunay::ccw(i)), b = fc->vertex(Delaunay::cw(i));
+          const std::uint32_t ia = dt.is_infinite(a) ? kInfinite : a->info();
+          const std::uint32_t ib = dt.is_infinite(b) ? kInfinite : b->info();
+          links.push_back(ia | (label(id, ia, ib) ? kInsideBit : 0));
+        } while (++fc != done);
+      }
     }
-    if (dt.dimension() < 2) throw std::invalid_argument("all valid cells are collinear");
-    for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) {
-      handle[v->info()] = v;
-    }
-    std::vector<std::uint32_t> ring;
+    start[n] = links.size();
+    home.resize(n);
     for (std::uint32_t id = 0; id < n; ++id) {
-      const VertexHandle v = handle[id];
-      if (v == VertexHandle()) continue;  // a duplicate point (not inserted)
-      ring.clear();
-      auto fc = dt.incident_faces(v);
-      const auto done = fc;
-      do {
-        const int i = fc->index(v);
-        const VertexHandle a = fc->vertex(Delaunay::ccw(i)), b = fc->vertex(Delaunay::cw(i));
-        const std::uint32_t ia = dt.is_infinite(a) ? kInfinite : a->info();
-        const std::uint32_t ib = dt.is_infinite(b) ? kInfinite : b->info();
-        ring.push_back(ia | (label(id, ia, ib) ? kInsideBit : 0));
-      } while (++fc != done);
-      set_link(id, ring);
+      if (start[id + 1] > start[id])
+        set_link(id, links.data() + start[id], start[id + 1] - start[id]);
     }
   }
 
@@ -592,6 +604,7 @@ struct Eliminator::Impl {
     static constexpr int kDc[8] = {1, 1, 0, -1, -1, -1, 0, 1};
     static constexpr int kDr[8] = {0, 1, 1, 1, 0, -1, -1, -1};
     const bool reverse = frame.m[0][0] * frame.m[1][1] - frame.m[0][1] * frame.m[1][0] < 0;
+    home.resize(vertex.size());
     std::vector<std::uint32_t> ring;
     for (int r = 0; r < h; ++r) {
       if (progress && r % std::max(1, 65536 / w) == 0 && r > 0 &&
@@ -627,7 +640,7 @@ struct Eliminator::Impl {
         for (std::size_t j = 0; j < n; ++j) {
           if (label(id, ring[j] & kIdMask, ring[(j + 1) % n] & kIdMask)) ring[j] |= kInsideBit;
         }
-        set_link(id, ring);
+        set_link(id, ring.data(), ring.size());
       }
     }
     return true;
@@ -712,7 +725,6 @@ Eliminator::Eliminator(const HeightGrid& grid, const GridFrame& frame,
     v.z = grid.z[m.cells[id]];
     v.p = Point(frame.u(v.col, v.row), frame.w(v.col, v.row));
   }
-  m.home.resize(n);
   if (options.grid_triangulation && n == static_cast<std::size_t>(grid.width) * grid.height &&
       grid.width >= 2 && grid.height >= 2) {
     if (!m.grid_links(progress)) m.cgal_links(progress);
