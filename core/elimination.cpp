@@ -9,15 +9,16 @@
 // vertex is removed only where the outline is straight through it and the straight edge is
 // Delaunay afterwards; once in, an edge stays Delaunay while its ends remain.
 //
-// CGAL builds the Delaunay triangulation of the grid's cells; the removals then run on a
-// flat structure of our own: each vertex's link (its neighbours counter-clockwise, the
-// infinite vertex among them on the convex hull, each with whether the face after it is in
-// the footprint), in one block of a pool. A removal refills the hole with the Delaunay
-// triangulation of the link, using CGAL's own symbolically perturbed in-circle test, so the
-// triangles are exactly those CGAL's remove() makes (the perturbed Delaunay triangulation is
-// unique), and the same refill, simulated, gives the importance before the removal. Reading a
-// link is then one block and the link's points, where CGAL's face walk took a cache miss a
-// face (perf: the walk was a third of vp's time).
+// The Delaunay triangulation of the grid's cells comes straight from the grid where every
+// cell is valid (grid_links), else from CGAL's insertion; the removals then run on a flat
+// structure of our own: each vertex's link (its neighbours counter-clockwise, the infinite
+// vertex among them on the convex hull, each with whether the face after it is in the
+// footprint), in its own 64-byte block (longer links in a spill pool). A removal refills the hole
+// with the Delaunay triangulation of the link, using CGAL's own symbolically perturbed in-circle
+// test, so the triangles are exactly those CGAL's remove() makes (the perturbed Delaunay
+// triangulation is unique), and the same refill, simulated, gives the importance before the
+// removal. Reading a link is then one block and the link's points, where CGAL's face walk took a
+// cache miss a face (perf: the walk was a third of vp's time).
 #include "core/elimination.hpp"
 
 #include <CGAL/Delaunay_triangulation_2.h>
