@@ -104,7 +104,20 @@ struct Scratch {
   std::vector<LinkTriangle> outer_tris;  // its refill
   std::vector<NewFace> faces;            // a removal's new faces
   std::vector<std::uint32_t> splice;     // a link's new stretch
+  // With memo: the last refill's polygon (its points less its first, where those differences
+  // are exact) and its result (see refill()).
+  bool memo = false;
+  bool memo_valid = false;
+  std::vector<Point> memo_offsets;
+  std::vector<LinkTriangle> memo_tris;
+  bool memo_ok = false;
 };
+
+// Whether b - a is exact in doubles (Knuth's two-difference: its rounding error is 0).
+bool exact_difference(double b, double a) {
+  const double d = b - a, bv = d - b, av = d - bv;
+  return (b - av) + (-a - bv) == 0;
+}
 
 }  // namespace
 
@@ -172,8 +185,45 @@ struct Eliminator::Impl {
   // polygon on its left. Appends counter-clockwise triangles; the first one appended is the
   // one on the closing edge. Returns false on a degenerate (collinear) polygon.
   bool refill(Scratch& s) const { return refill(s.poly, s.tris, s); }
+  //
+  // With s.memo, a polygon that is an exact translate of the last one refilled gets the same
+  // triangles without a test: orientation and in-circle signs are the same for translated
+  // points, and so is the perturbation's xy order (a full grid's first evaluations: nearly
+  // every star is the same hexagon).
   bool refill(const std::vector<std::uint32_t>& poly, std::vector<LinkTriangle>& tris,
               Scratch& s) const {
+    if (s.memo) {
+      const Point& o = point(poly[0]);
+      bool same = s.memo_valid && poly.size() == s.memo_offsets.size() + 1;
+      for (std::size_t j = 1; same && j < poly.size(); ++j) {
+        const Point& p = point(poly[j]);
+        same = p.x() - o.x() == s.memo_offsets[j - 1].x() &&
+               p.y() - o.y() == s.memo_offsets[j - 1].y() && exact_difference(p.x(), o.x()) &&
+               exact_difference(p.y(), o.y());
+      }
+      if (same) {
+        tris = s.memo_tris;
+        return s.memo_ok;
+      }
+    }
+    const bool ok = refill_anew(poly, tris, s);
+    if (s.memo) {
+      s.memo_offsets.clear();
+      s.memo_valid = true;
+      const Point& o = point(poly[0]);
+      for (std::size_t j = 1; j < poly.size() && s.memo_valid; ++j) {
+        const Point& p = point(poly[j]);
+        s.memo_valid = exact_difference(p.x(), o.x()) && exact_difference(p.y(), o.y());
+        s.memo_offsets.emplace_back(p.x() - o.x(), p.y() - o.y());
+      }
+      s.memo_tris = tris;
+      s.memo_ok = ok;
+    }
+    return ok;
+  }
+
+  bool refill_anew(const std::vector<std::uint32_t>& poly, std::vector<LinkTriangle>& tris,
+                   Scratch& s) const {
     tris.clear();
     s.todo.assign(1, {0, static_cast<int>(poly.size()) - 1});
     while (!s.todo.empty()) {
@@ -746,6 +796,7 @@ std::size_t Eliminator::alive_count() const { return impl_->alive; }
 
 void Eliminator::compute_importance(std::size_t begin, std::size_t end) {
   Scratch scratch;
+  scratch.memo = true;
   // A lower bound now, the importance when needed (see eliminate()).
   bool deferred = false;
   bool* const defer = impl_->lazy() ? &deferred : nullptr;
