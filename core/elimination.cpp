@@ -104,6 +104,7 @@ struct Scratch {
   std::vector<LinkTriangle> outer_tris;  // its refill
   std::vector<NewFace> faces;            // a removal's new faces
   std::vector<std::uint32_t> splice;     // a link's new stretch
+  std::vector<std::uint32_t> moved;      // a link being moved to the spill pool
   // With memo: the last refill's polygon (its points less its first, where those differences
   // are exact) and its result (see refill()).
   bool memo = false;
@@ -182,9 +183,8 @@ struct Eliminator::Impl {
   }
 
   // Delaunay refill of poly[lo..hi], closed by the edge poly[hi] -> poly[lo] with the
-  // polygon on its left. Appends counter-clockwise triangles; the first one appended is the
-  // one on the closing edge. Returns false on a degenerate (collinear) polygon.
-  bool refill(Scratch& s) const { return refill(s.poly, s.tris, s); }
+  // polygon on its left, into tris: counter-clockwise triangles, the first one on the closing
+  // edge. Returns false on a degenerate (collinear) polygon.
   //
   // With s.memo, a polygon that is an exact translate of the last one refilled gets the same
   // triangles without a test: orientation and in-circle signs are the same for translated
@@ -221,6 +221,8 @@ struct Eliminator::Impl {
     }
     return ok;
   }
+
+  bool refill(Scratch& s) const { return refill(s.poly, s.tris, s); }
 
   bool refill_anew(const std::vector<std::uint32_t>& poly, std::vector<LinkTriangle>& tris,
                    Scratch& s) const {
@@ -372,6 +374,15 @@ struct Eliminator::Impl {
     for (std::size_t j = 0; j < n; ++j) s.poly[j] = s.ring[(least + j) % n];
   }
 
+  // The polygon of an outline vertex's inside run of faces (after read_ring; the run from
+  // first): a, the link between, b.
+  static void inside_polygon(Scratch& s, std::size_t first) {
+    const std::size_t n = s.ring.size(), end = run_end(s, first);
+    s.poly.clear();
+    for (std::size_t j = first; j != end; j = (j + 1) % n) s.poly.push_back(s.ring[j]);
+    s.poly.push_back(s.ring[end]);
+  }
+
   // The outer side of an outline vertex's hole (after read_ring; the inside run from first):
   // the link from b round to a, into s.outer, and its refill into s.outer_tris (none on the
   // convex hull, where it is b, the infinite vertex, a). False where it cannot be refilled
@@ -408,10 +419,7 @@ struct Eliminator::Impl {
       closed_polygon(s);
     } else {
       if (inside_runs(s, first) != 1) return kLocked;  // the footprint pinches at v
-      s.poly.clear();
-      const std::size_t end = run_end(s, first);
-      for (std::size_t j = first; j != end; j = (j + 1) % n) s.poly.push_back(s.ring[j]);
-      s.poly.push_back(s.ring[end]);
+      inside_polygon(s, first);
       // The outline runs a -> v -> b; it must be straight (in grid space) through v.
       const Vertex &a = vertex[s.poly.front()], &b = vertex[s.poly.back()], &c = vertex[v];
       const std::int64_t ax = a.col - c.col, ay = a.row - c.row;
@@ -465,10 +473,11 @@ struct Eliminator::Impl {
            options.vp_volume == VolumeMethod::exact;
   }
 
-  // The refill's triangles (s.tris over s.poly) appended to s.faces, labelled.
-  void add_refill(Scratch& s) const {
-    for (const LinkTriangle& t : s.tris) {
-      const std::uint32_t a = s.poly[t[0]], b = s.poly[t[1]], c = s.poly[t[2]];
+  // A refill's triangles (tris over poly) appended to s.faces, labelled.
+  void add_faces(const std::vector<std::uint32_t>& poly, const std::vector<LinkTriangle>& tris,
+                 Scratch& s) const {
+    for (const LinkTriangle& t : tris) {
+      const std::uint32_t a = poly[t[0]], b = poly[t[1]], c = poly[t[2]];
       s.faces.push_back({{a, b, c}, label(a, b, c)});
     }
   }
@@ -491,23 +500,17 @@ struct Eliminator::Impl {
     if (inside_runs(s, first) == 0) {
       closed_polygon(s);
       if (!refill(s)) throw std::logic_error("elimination: a removed vertex's hole is degenerate");
-      add_refill(s);
+      add_faces(s.poly, s.tris, s);
     } else {
-      const std::size_t end = run_end(s, first);
-      s.poly.clear();
-      for (std::size_t j = first; j != end; j = (j + 1) % n) s.poly.push_back(s.ring[j]);
-      s.poly.push_back(s.ring[end]);
+      inside_polygon(s, first);
       if (!refill(s) || !outer_refill(s, first)) {
         throw std::logic_error("elimination: a removed vertex's hole is degenerate");
       }
-      add_refill(s);
-      if (s.outer_tris.empty()) {
+      add_faces(s.poly, s.tris, s);
+      if (s.outer_tris.empty()) {  // on the hull: b, the infinite vertex, a
         s.faces.push_back({{s.outer[0], s.outer[1], s.outer[2]}, false});
       } else {
-        for (const LinkTriangle& t : s.outer_tris) {
-          const std::uint32_t p = s.outer[t[0]], q = s.outer[t[1]], r = s.outer[t[2]];
-          s.faces.push_back({{p, q, r}, label(p, q, r)});
-        }
+        add_faces(s.outer, s.outer_tris, s);
       }
     }
     for (std::size_t j = 0; j < n; ++j) {
@@ -520,19 +523,27 @@ struct Eliminator::Impl {
   // Vertex id's link, counter-clockwise (entries as in Home), stored.
   void set_link(std::uint32_t id, const std::uint32_t* ring, std::size_t size) {
     Home& h = home[id];
+    h.size = kExactKey;
     if (size <= kHomeLinks) {
       std::copy_n(ring, size, h.e);
-      h.size = static_cast<std::uint32_t>(size) | kExactKey;
-      return;
+      h.size |= static_cast<std::uint32_t>(size);
+    } else {
+      std::copy_n(ring, size, to_spill(h, static_cast<std::uint32_t>(size + 4)));
+      h.size |= static_cast<std::uint32_t>(size);
     }
+  }
+
+  // Room for `room` entries at the spill pool's end made h's (its size word keeps its count
+  // and kExactKey, gains kSpilled); returns where. The home block's entries are overwritten:
+  // copy them out first.
+  std::uint32_t* to_spill(Home& h, std::uint32_t room) {
     const std::uint64_t at = spill.size();
-    const auto room = static_cast<std::uint32_t>(size + 4);
     spill.resize(at + room);
-    std::copy_n(ring, size, spill.data() + at);
-    h.size = static_cast<std::uint32_t>(size) | kSpilled | kExactKey;
+    h.size |= kSpilled;
     h.e[0] = static_cast<std::uint32_t>(at);
     h.e[1] = static_cast<std::uint32_t>(at >> 32);
     h.e[2] = room;
+    return spill.data() + at;
   }
 
   // The links of the Delaunay triangulation of the vertices, by CGAL's insertion.
@@ -643,14 +654,9 @@ struct Eliminator::Impl {
         if (encircles(at(c, r), at(c, r + 1), right, left)) return false;
       }
     }
-    auto split_main = [&](int c, int r) {  // square (c, r), if it exists, split along main
-      return c >= 0 && r >= 0 && c + 1 < w && r + 1 < h &&
-             main[static_cast<std::size_t>(r) * (w - 1) + c] != 0;
-    };
-    auto split_anti = [&](int c, int r) {
-      return c >= 0 && r >= 0 && c + 1 < w && r + 1 < h &&
-             main[static_cast<std::size_t>(r) * (w - 1) + c] == 0;
-    };
+    auto square = [&](int c, int r) { return c >= 0 && r >= 0 && c + 1 < w && r + 1 < h; };
+    auto split_main = [&](int c, int r) { return square(c, r) && is_main(c, r); };
+    auto split_anti = [&](int c, int r) { return square(c, r) && !is_main(c, r); };
     // The eight directions by angle in (col, row); the frame keeps that turn or reverses it.
     static constexpr int kDc[8] = {1, 1, 0, -1, -1, -1, 0, 1};
     static constexpr int kDr[8] = {0, 1, 1, 1, 0, -1, -1, -1};
@@ -739,16 +745,11 @@ struct Eliminator::Impl {
     const std::uint32_t size = n - 1 + static_cast<std::uint32_t>(s.splice.size());
     const std::uint32_t capacity = h.size & kSpilled ? h.spill_capacity() : kHomeLinks;
     if (size > capacity) {
-      const std::uint32_t room = std::max(2 * capacity, size + 4);
-      const std::uint64_t at = spill.size();
-      spill.resize(at + room);
-      e = link(h);  // the spill may have moved
-      std::copy_n(e, n, spill.data() + at);
-      h.size = n | kSpilled | (h.size & kExactKey);
-      h.e[0] = static_cast<std::uint32_t>(at);
-      h.e[1] = static_cast<std::uint32_t>(at >> 32);
-      h.e[2] = room;
-      e = spill.data() + at;
+      // note: the entries copied out first (to_spill overwrites a home block's, and moves the
+      // pool, a spilled link's).
+      s.moved.assign(e, e + n);
+      e = to_spill(h, std::max(2 * capacity, size + 4));
+      std::copy(s.moved.begin(), s.moved.end(), e);
     }
     std::memmove(e + p + s.splice.size(), e + p + 1, (n - p - 1) * sizeof *e);
     std::copy(s.splice.begin(), s.splice.end(), e + p);
