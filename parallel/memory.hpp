@@ -30,9 +30,10 @@ void release_free_memory();
 // 128 MiB. release_free_memory still hands everything free back. For executables, before their
 // threads start.
 // Also advises the next 256 MiB of the main thread's heap (glibc's main arena) for transparent
-// huge pages before anything touches them, until the first release_free_memory (Linux, with
-// no limit of address space or data; the rest of it, other threads' arenas and blocks mapped
-// on their own get ordinary pages).
+// huge pages before anything touches them, and the heap of each oneTBB worker thread (its own
+// arena) as it first runs a task of the main thread's arena, until the first
+// release_free_memory (Linux, with no limit of address space or data; the rest of the heap,
+// other arenas and blocks mapped on their own get ordinary pages).
 // note: a page the system hands this process costs about 11 us to fault in on these machines
 // (a virtual machine), more than the work done on it: San Gabriel to 10 % (qem, 1 thread)
 // faulted in 28k pages, 0.21-0.28 s of system time (15 % of the CPU); 17.8k after round 11,

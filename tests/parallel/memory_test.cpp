@@ -1,12 +1,18 @@
 // The executables' heap (keep_freed_memory): blocks come on transparent huge pages where the
-// kernel offers them, until the first trim.
+// kernel offers them, the main thread's and oneTBB's workers', until the first trim.
 #include "parallel/memory.hpp"
 
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <atomic>
 #include <catch2/catch.hpp>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace {
@@ -53,4 +59,37 @@ TEST_CASE("keep_freed_memory: the heap's blocks on huge pages, where the kernel 
   // A trim hands the heap's top back: from then on, the heap is glibc's own.
   dpts::par::release_free_memory();
   CHECK_FALSE(dpts::par::huge_page_heap());
+}
+
+TEST_CASE("keep_freed_memory: a worker thread's blocks on huge pages too") {
+  dpts::par::keep_freed_memory();
+  const std::string thp = thp_setting();
+  if (!dpts::par::huge_page_heap() || thp.empty() || thp.find("[never]") != std::string::npos ||
+      kb_line("/proc/self/smaps_rollup", "AnonHugePages:") < 0) {
+    WARN("no huge pages here (sanitizers, or the kernel's setting: '" << thp << "')");
+    return;
+  }
+  // A block made and touched by a worker thread (not the main one, whose heap the case above
+  // checks), while the main thread waits: 8 MiB, at least 3 whole huge pages.
+  constexpr std::size_t kBytes = std::size_t{8} << 20;
+  tbb::global_control two(tbb::global_control::max_allowed_parallelism, 2);
+  std::atomic<long> grown{-1};
+  std::atomic<bool> done{false};
+  tbb::parallel_for(0, 64, [&](int) {
+    if (tbb::this_task_arena::current_thread_index() == 0) {
+      while (!done) std::this_thread::yield();  // the main thread: out of the way
+      return;
+    }
+    if (done.exchange(true)) return;
+    const long before = kb_line("/proc/self/smaps_rollup", "AnonHugePages:");
+    std::vector<char> block(kBytes);
+    std::memset(block.data(), 1, block.size());
+    grown = kb_line("/proc/self/smaps_rollup", "AnonHugePages:") - before + (block[7] - 1);
+  });
+  if (grown < 0) {
+    WARN("no worker thread ran a task here (one core?)");
+    return;
+  }
+  INFO("AnonHugePages grew by " << grown << " kB in the worker; THP " << thp);
+  CHECK(grown >= 3 * 2048);
 }
