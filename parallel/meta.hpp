@@ -104,9 +104,10 @@ void check_memory(const core::RasterSource& dem, std::size_t target, std::size_t
                   std::size_t limit);
 
 // The piece value of the paper's CalcPieceValue on a window of heights: the mean ED/GD over
-// all pairs of `points` random points in the footprint (seeded), GD on the Steiner graph of
-// the grid TIN at the default delta. Windows larger than max_cells are subsampled (every s-th
-// row and column) to at most max_cells cells first: a tested cheaper equivalent (see
+// all pairs of `points` random points in the footprint (seeded), GD the straightened geodesics
+// (pairwise_distances) on the Steiner graph of the grid TIN at dpts-eval's spacing on a DEM
+// (kStraightenedDeltaFactorDem x its mean edge). Windows larger than max_cells are subsampled
+// (every s-th row and column) to at most max_cells cells first: a tested cheaper equivalent (see
 // tests/parallel/meta_test.cpp). col0, row0 place the window in the raster (for the frame).
 // Returns 1 (flat) when the window has no face to sample.
 double piece_value(const core::HeightGrid& window, int col0, int row0, const core::GridFrame& frame,
