@@ -119,10 +119,18 @@ bool footprint_contains_third(const HeightGrid& grid, std::int64_t sum_col, std:
 
 FootprintIndex::FootprintIndex(const HeightGrid& grid)
     : width_(grid.width), height_(grid.height), mask_(grid.cell_count(), 0) {
+  bool full = true;
   for (int r = 0; r + 1 < grid.height; ++r) {
     for (int c = 0; c + 1 < grid.width; ++c) {
-      mask_[grid.index(c, r)] = static_cast<std::uint8_t>(square_mask(grid, c, r));
+      const int mask = square_mask(grid, c, r);
+      mask_[grid.index(c, r)] = static_cast<std::uint8_t>(mask);
+      full = full && mask == 15;
     }
+  }
+  // note: a DEM with every square whole (no no-data) needs no look-up: its masks are freed.
+  if (full) {
+    full_ = true;
+    mask_ = {};
   }
 }
 
@@ -130,6 +138,7 @@ bool FootprintIndex::contains_third(std::int64_t sum_col, std::int64_t sum_row) 
   const std::int64_t c = floor_div3(sum_col);
   const std::int64_t r = floor_div3(sum_row);
   if (c < 0 || r < 0 || c + 1 >= width_ || r + 1 >= height_) return false;
+  if (full_) return true;
   return square_contains(mask_[static_cast<std::size_t>(r * width_ + c)],
                          static_cast<int>(sum_col - 3 * c), static_cast<int>(sum_row - 3 * r));
 }

@@ -33,6 +33,7 @@ class FootprintIndex {
 
  private:
   std::int64_t width_ = 0, height_ = 0;
+  bool full_ = false;               // every square whole: mask_ is empty
   std::vector<std::uint8_t> mask_;  // square (c, r) at r * width + c
 };
 

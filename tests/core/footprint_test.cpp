@@ -96,3 +96,21 @@ TEST_CASE("GridFrame maps a square north-up grid to integers", "[core][footprint
   const double singular[2][2] = {{1.0, 2.0}, {2.0, 4.0}};
   CHECK_THROWS(dpts::core::GridFrame::from_jacobian(singular));
 }
+
+TEST_CASE("the footprint index answers as the definition, on full grids and with voids",
+          "[core][footprint]") {
+  // Every point of thirds over the grid and a cell beyond it: a full grid's index keeps no
+  // masks (every square is whole), a voided one looks each square up; both as the definition.
+  for (int trial = -2; trial < 30; ++trial) {
+    const auto g = trial < 0
+                       ? dpts::test::make_grid(5 + trial, 4, [](int c, int r) { return c + r; })
+                       : dpts::test::random_voids_grid(7, trial, [](int, int) { return 1.0; });
+    const FootprintIndex index(g);
+    for (int sr = -3; sr <= 3 * g.height + 3; ++sr) {
+      for (int sc = -3; sc <= 3 * g.width + 3; ++sc) {
+        INFO("trial " << trial << " thirds (" << sc << ", " << sr << ")");
+        CHECK(index.contains_third(sc, sr) == footprint_contains_third(g, sc, sr));
+      }
+    }
+  }
+}
