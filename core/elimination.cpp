@@ -523,14 +523,9 @@ struct Eliminator::Impl {
   // Vertex id's link, counter-clockwise (entries as in Home), stored.
   void set_link(std::uint32_t id, const std::uint32_t* ring, std::size_t size) {
     Home& h = home[id];
-    h.size = kExactKey;
-    if (size <= kHomeLinks) {
-      std::copy_n(ring, size, h.e);
-      h.size |= static_cast<std::uint32_t>(size);
-    } else {
-      std::copy_n(ring, size, to_spill(h, static_cast<std::uint32_t>(size + 4)));
-      h.size |= static_cast<std::uint32_t>(size);
-    }
+    h.size = static_cast<std::uint32_t>(size) | kExactKey;
+    std::copy_n(ring, size,
+                size <= kHomeLinks ? h.e : to_spill(h, static_cast<std::uint32_t>(size + 4)));
   }
 
   // Room for `room` entries at the spill pool's end made h's (its size word keeps its count
