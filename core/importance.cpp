@@ -239,59 +239,54 @@ double dist3(const Point3& a, const Point3& b) {
                    (a.z - b.z) * (a.z - b.z));
 }
 
-// The fan unfolded into the plane around the apex (at the origin), from link[from] going
-// counter-clockwise (dir = +1) or clockwise (dir = -1): for k steps (k fan triangles crossed),
-// total[k] is the unfolded angle and point[k] the link vertex reached. Every pair that starts
-// at link[from] reads a prefix of it.
-struct Unfolding {
-  std::vector<double> total;
-  std::vector<P2> point;
-  std::vector<std::size_t> index;  // the link vertex reached after k steps
-};
-
-void unfold_fan(const Star& s, const std::vector<double>& radius, const std::vector<double>& angle,
-                std::size_t from, std::size_t max_steps, int dir, Unfolding& u) {
-  const auto step = [&](std::size_t i) { return dir > 0 ? (i + 1) % s.n : (i + s.n - 1) % s.n; };
-  const auto face = [&](std::size_t i) { return dir > 0 ? i : (i + s.n - 1) % s.n; };
-  u.total.resize(max_steps + 1);
-  u.point.resize(max_steps + 1);
-  u.index.resize(max_steps + 1);
-  u.total[0] = 0.0;
-  u.point[0] = {radius[from], 0.0};
-  u.index[0] = from;
-  double total = 0.0;
+// The shortest paths over the fan from link[from], going counter-clockwise (dir = +1) or
+// clockwise (dir = -1), to the link vertex reached after k fan triangles, for k = 1 to
+// max_steps, into gd[k]: the fan unfolded into the plane around the apex (at the origin); where
+// the unfolded angle is pi or more the path runs through the apex; otherwise it is the taut
+// string from one end to the other, bent round the link vertices that poke towards the apex
+// (a convex chain). The chain is kept as the unfolding goes (a point is taken in as the string's
+// end, the vertices it no longer wraps round dropped), with its length so far at each of its
+// vertices: each k reads its string off the chain, every pair from one start in one pass.
+// note: unfolded by rotations (each fan triangle's apex angle as its cosine and sine), not by
+// the cosine and sine of the summed angles: no trigonometry, which took 30 % of pld's time
+// (2026-11-28: rounding apart, the same paths).
+void fan_geodesics(const Star& s, const std::vector<double>& radius, const std::vector<P2>& turn,
+                   std::size_t from, std::size_t max_steps, int dir, std::vector<P2>& chain,
+                   std::vector<double>& length, std::vector<double>& gd) {
+  chain.resize(max_steps + 1);
+  length.resize(max_steps + 1);
+  gd.resize(max_steps + 1);
+  chain[0] = {radius[from], 0.0};
+  length[0] = 0.0;
+  std::size_t h = 1;          // the chain's vertices
+  double cx = 1.0, cy = 0.0;  // the unfolded direction
+  bool past_pi = false;
   std::size_t idx = from;
   for (std::size_t k = 1; k <= max_steps; ++k) {
-    total += angle[face(idx)];
-    idx = step(idx);
-    u.total[k] = total;
-    u.index[k] = idx;
-    // note: the angles are not negative, so from the first total of pi on, every path runs
-    // through the apex and no point further on is read.
-    if (total < M_PI) u.point[k] = {radius[idx] * std::cos(total), radius[idx] * std::sin(total)};
+    const P2 t = turn[dir > 0 ? idx : (idx + s.n - 1) % s.n];
+    idx = dir > 0 ? (idx + 1) % s.n : (idx + s.n - 1) % s.n;
+    // note: each turn is by an angle in [0, pi], so while the sum is below pi the direction
+    // stays in the upper half plane; the sum reaches pi where it leaves it (or lands on -x).
+    // The angles are not negative: from then on every path runs through the apex.
+    if (!past_pi) {
+      const double nx = cx * t.x - cy * t.y, ny = cx * t.y + cy * t.x;
+      cx = nx;
+      cy = ny;
+      past_pi = ny < 0 || (ny == 0 && nx < 0);
+    }
+    if (past_pi) {
+      gd[k] = radius[from] + radius[idx];
+      continue;
+    }
+    const P2 p{radius[idx] * cx, radius[idx] * cy};
+    // Keep only right turns: those are the link vertices the string wraps round.
+    while (h >= 2 && cross(chain[h - 2], chain[h - 1], p) >= 0) --h;
+    // note: not std::hypot, several times slower; the lengths are far from overflow.
+    const double dx = p.x - chain[h - 1].x, dy = p.y - chain[h - 1].y;
+    length[h] = length[h - 1] + std::sqrt(dx * dx + dy * dy);
+    chain[h++] = p;
+    gd[k] = length[h - 1];
   }
-}
-
-// Shortest path over the first `steps` fan triangles of an unfolding: when the unfolded angle
-// is pi or more the path runs through the apex; otherwise it is the taut string from one end
-// to the other, bent round the link vertices that poke towards the apex (a convex chain).
-// note: the unfolding made once per start, where each pair made its own: the same sums in the
-// same order, so the same distances, with n times fewer sines and cosines.
-double fan_geodesic(const std::vector<double>& radius, const Unfolding& u, std::size_t steps,
-                    std::vector<P2>& chain) {
-  if (u.total[steps] >= M_PI) return radius[u.index[0]] + radius[u.index[steps]];
-  chain.assign(u.point.begin(), u.point.begin() + static_cast<std::ptrdiff_t>(steps) + 1);
-  // Keep only right turns: those are the link vertices the string wraps round.
-  std::size_t h = 0;
-  for (std::size_t k = 0; k < chain.size(); ++k) {
-    while (h >= 2 && cross(chain[h - 2], chain[h - 1], chain[k]) >= 0) --h;
-    chain[h++] = chain[k];
-  }
-  double len = 0.0;
-  for (std::size_t k = 1; k < h; ++k) {
-    len += std::hypot(chain[k].x - chain[k - 1].x, chain[k].y - chain[k - 1].y);
-  }
-  return len;
 }
 
 }  // namespace
@@ -299,31 +294,36 @@ double fan_geodesic(const std::vector<double>& radius, const Unfolding& u, std::
 double pld_importance(const Star& s) {
   const std::size_t n = s.n;
   // note: per thread, not per call (an evaluation is a few microseconds; allocating took 5 %).
-  thread_local std::vector<double> radius, angle;
-  thread_local std::vector<P2> chain;
-  thread_local Unfolding ccw, cw;
+  thread_local std::vector<double> radius;
+  thread_local std::vector<P2> turn, chain;
+  thread_local std::vector<double> length, ccw, cw;
   radius.assign(n, 0.0);
-  angle.assign(n, 0.0);
+  turn.assign(n, P2{1.0, 0.0});
   for (std::size_t i = 0; i < n; ++i) radius[i] = dist3(s.apex, s.link[i]);
-  // The 3D angle at the apex of each fan triangle.
+  // The 3D angle at the apex of each fan triangle, as its cosine and sine (not negative).
   for (std::size_t i = 0; i < fan_count(s); ++i) {
     const Point3& a = s.link[i];
     const Point3& b = s.link[(i + 1) % n];
     const double ax = a.x - s.apex.x, ay = a.y - s.apex.y, az = a.z - s.apex.z;
     const double bx = b.x - s.apex.x, by = b.y - s.apex.y, bz = b.z - s.apex.z;
     const double cx = ay * bz - az * by, cy = az * bx - ax * bz, cz = ax * by - ay * bx;
-    angle[i] = std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), ax * bx + ay * by + az * bz);
+    const double sine = std::sqrt(cx * cx + cy * cy + cz * cz),
+                 cosine = ax * bx + ay * by + az * bz;
+    const double norm = std::sqrt(sine * sine + cosine * cosine);
+    // note: a degenerate triangle (an edge of length 0: no TIN of distinct vertices has one)
+    // turns by nothing (atan2 of two zeros gave 0 or pi by their signs).
+    if (norm > 0) turn[i] = {cosine / norm, sine / norm};
   }
   double ratio = 1.0;
   for (std::size_t i = 0; i + 2 < n; ++i) {
     // Pairs (i, j > i + 1): j - i steps counter-clockwise, n - (j - i) clockwise.
-    unfold_fan(s, radius, angle, i, n - 1 - i, +1, ccw);
-    if (s.closed) unfold_fan(s, radius, angle, i, n - 2, -1, cw);
+    fan_geodesics(s, radius, turn, i, n - 1 - i, +1, chain, length, ccw);
+    if (s.closed) fan_geodesics(s, radius, turn, i, n - 2, -1, chain, length, cw);
     for (std::size_t j = i + 2; j < n; ++j) {
       if (s.closed && i == 0 && j == n - 1) continue;  // joined by a link edge
       const double ed = dist3(s.link[i], s.link[j]);
-      double gd = fan_geodesic(radius, ccw, j - i, chain);
-      if (s.closed) gd = std::min(gd, fan_geodesic(radius, cw, n - (j - i), chain));
+      double gd = ccw[j - i];
+      if (s.closed) gd = std::min(gd, cw[n - (j - i)]);
       if (gd > 0) ratio = std::min(ratio, ed / gd);
     }
   }

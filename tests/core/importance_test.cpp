@@ -1,8 +1,10 @@
 // VP and PLD importance on hand-made stars, against hand-computed values.
 #include "core/importance.hpp"
 
+#include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 using dpts::core::LinkTriangle;
@@ -138,4 +140,96 @@ TEST_CASE("VP's lower bound is below the exact volume, and equal where one surfa
   }
   CHECK(tight > 200);  // a real bound, not 0
   CHECK(loose > 200);  // where the surfaces cross inside, below the volume
+}
+
+namespace {
+
+// PLD as the fan's unfolding was first written: each pair's fan unfolded by the cosine and sine
+// of its summed apex angles (atan2 of each), the path through the apex from a sum of pi on,
+// else the taut string round the link vertices that poke towards the apex.
+double pld_by_angles(const Star& s) {
+  const std::size_t n = s.n;
+  auto sub = [](const Point3& a, const Point3& b) {
+    return std::array<double, 3>{a.x - b.x, a.y - b.y, a.z - b.z};
+  };
+  auto len = [](std::array<double, 3> v) {
+    return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  };
+  std::vector<double> radius(n), angle(n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) radius[i] = len(sub(s.link[i], s.apex));
+  const std::size_t fans = s.closed ? n : n - 1;
+  for (std::size_t i = 0; i < fans; ++i) {
+    const auto a = sub(s.link[i], s.apex), b = sub(s.link[(i + 1) % n], s.apex);
+    const std::array<double, 3> c{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                                  a[0] * b[1] - a[1] * b[0]};
+    angle[i] = std::atan2(len(c), a[0] * b[0] + a[1] * b[1] + a[2] * b[2]);
+  }
+  // The path over `steps` fan triangles from link[from] (dir +1: counter-clockwise).
+  auto gd = [&](std::size_t from, std::size_t steps, int dir) {
+    std::vector<std::array<double, 2>> chain{{radius[from], 0.0}};
+    double total = 0.0;
+    std::size_t idx = from;
+    for (std::size_t k = 1; k <= steps; ++k) {
+      total += angle[dir > 0 ? idx : (idx + n - 1) % n];
+      idx = dir > 0 ? (idx + 1) % n : (idx + n - 1) % n;
+      chain.push_back({radius[idx] * std::cos(total), radius[idx] * std::sin(total)});
+    }
+    if (total >= M_PI) return radius[from] + radius[idx];
+    std::size_t h = 0;
+    auto turn = [](auto o, auto a, auto b) {
+      return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+    };
+    for (std::size_t k = 0; k < chain.size(); ++k) {
+      while (h >= 2 && turn(chain[h - 2], chain[h - 1], chain[k]) >= 0) --h;
+      chain[h++] = chain[k];
+    }
+    double sum = 0.0;
+    for (std::size_t k = 1; k < h; ++k) {
+      sum += std::hypot(chain[k][0] - chain[k - 1][0], chain[k][1] - chain[k - 1][1]);
+    }
+    return sum;
+  };
+  double ratio = 1.0;
+  for (std::size_t i = 0; i + 2 < n; ++i) {
+    for (std::size_t j = i + 2; j < n; ++j) {
+      if (s.closed && i == 0 && j == n - 1) continue;
+      double g = gd(i, j - i, +1);
+      if (s.closed) g = std::min(g, gd(i, n - (j - i), -1));
+      if (g > 0) ratio = std::min(ratio, len(sub(s.link[i], s.link[j])) / g);
+    }
+  }
+  return 1.0 - ratio;
+}
+
+}  // namespace
+
+TEST_CASE("PLD unfolded by rotations is PLD unfolded by summed angles", "[core][importance][pld]") {
+  // Random stars of 3 to 14 link vertices, closed and open (on the outline), flat to steep
+  // (fans of 2 pi and far more, so that paths run through the apex), and link vertices poking
+  // towards the apex.
+  std::uint64_t state = 777;
+  auto uniform = [&state] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) * 0x1.0p-53;
+  };
+  int through_apex = 0, bent = 0;
+  for (int k = 0; k < 3000; ++k) {
+    const int n = 3 + k % 12;
+    const bool closed = k % 4 != 0;
+    const double relief = k % 5 == 0 ? 0.0 : k % 5 == 1 ? 5.0 : 60.0;
+    std::vector<Point3> link;
+    for (int i = 0; i < n; ++i) {
+      const double a = (closed ? 2.0 : 1.5) * M_PI * (i + 0.8 * uniform()) / n;
+      const double r = 30.0 * (i % 3 == 1 && k % 2 == 0 ? 0.15 + 0.3 * uniform() : 1.0);
+      link.push_back({r * std::cos(a), r * std::sin(a), relief * (uniform() - 0.5)});
+    }
+    const Star star{{0, 0, relief * (uniform() - 0.5)}, link.data(), link.size(), closed};
+    const double reference = pld_by_angles(star);
+    INFO("star " << k);
+    CHECK(dpts::core::pld_importance(star) == Approx(reference).margin(1e-12));
+    through_apex += reference > 0.2;
+    bent += reference > 0.01 && reference < 0.2;
+  }
+  CHECK(through_apex > 100);
+  CHECK(bent > 100);
 }
