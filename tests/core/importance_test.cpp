@@ -20,6 +20,16 @@ std::vector<Point3> square_link(double z0, double z1, double z2, double z3) {
 // The hole refilled along the diagonal link[0]-link[2].
 const std::vector<LinkTriangle> kSplit02 = {{0, 1, 2}, {0, 2, 3}};
 
+// Uniform numbers in [0, 1) from a seed (a 64-bit LCG's top 53 bits): the same stars on every
+// machine.
+struct Uniform {
+  std::uint64_t state;
+  double operator()() {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) * 0x1.0p-53;
+  }
+};
+
 }  // namespace
 
 TEST_CASE("removing a vertex of a plane has VP importance 0", "[core][importance][vp]") {
@@ -110,11 +120,7 @@ TEST_CASE("VP's lower bound is below the exact volume, and equal where one surfa
   CHECK(dpts::core::vp_volume_bound(crossing, kSplit02) == Approx(2.0 / 3.0).epsilon(1e-8));
   // Random stars of 3 to 12 link vertices at heights far from 0 (rounding margins matter
   // there), refilled as a fan from link[0]: never above the exact volume.
-  std::uint64_t state = 12345;
-  auto uniform = [&state] {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    return static_cast<double>(state >> 11) * 0x1.0p-53;
-  };
+  Uniform uniform{12345};
   int tight = 0, loose = 0;
   for (int k = 0; k < 2000; ++k) {
     const int n = 3 + k % 10;
@@ -207,11 +213,7 @@ TEST_CASE("PLD unfolded by rotations is PLD unfolded by summed angles", "[core][
   // Random stars of 3 to 14 link vertices, closed and open (on the outline), flat to steep
   // (fans of 2 pi and far more, so that paths run through the apex), and link vertices poking
   // towards the apex.
-  std::uint64_t state = 777;
-  auto uniform = [&state] {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    return static_cast<double>(state >> 11) * 0x1.0p-53;
-  };
+  Uniform uniform{777};
   int through_apex = 0, bent = 0;
   for (int k = 0; k < 3000; ++k) {
     const int n = 3 + k % 12;
