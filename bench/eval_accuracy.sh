@@ -6,20 +6,31 @@
 # where err = (GD - exact) / exact per pair on T and on the mesh S, and measure = the paper's
 # figure (mean |GD_T - GD_S| / GD_T), with its relative difference from the exact one.
 # Usage: bench/eval_accuracy.sh DEM [dpts-eval options, e.g. --points 60 --sets 1 --delta 5]
-#   MODES="vp vp-meta" KEEPS="10 50" bench/eval_accuracy.sh ...
+#   MODES="vp vp-meta" KEEPS="10 50" bench/eval_accuracy.sh ...   (default: every mode, 10 and 50)
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 dem=${1:?usage: eval_accuracy.sh DEM [dpts-eval options]}
 shift
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+# The exact run takes the options but the Steiner graph's own (--delta, --steiner), which
+# dpts-eval refuses with --exact.
+args=("$@") exact_args=()
+while (($#)); do
+  case $1 in
+    --delta) shift 2 || { echo "eval_accuracy.sh: --delta needs a value" >&2; exit 2; }; continue ;;
+    --delta=* | --steiner) ;;
+    *) exact_args+=("$1") ;;
+  esac
+  shift
+done
 echo "mode,keep,pairs,mean_err_T,max_err_T,mean_err_S,max_err_S,measure_exact,measure,measure_diff"
-for mode in ${MODES:-vp vp-meta pld-meta qslim}; do
+for mode in ${MODES:-qem vp vp-meta pld-meta qslim}; do
   for keep in ${KEEPS:-10 50}; do
     "$root/build/dpts-par" --quiet --algo "$mode" --keep "$keep%" "$dem" "$tmp/s.ply"
-    "$root/build/dpts-eval" --quiet --exact "$@" --dem "$dem" --mesh "$tmp/s.ply" \
+    "$root/build/dpts-eval" --quiet --exact ${exact_args[@]+"${exact_args[@]}"} --dem "$dem" --mesh "$tmp/s.ply" \
       --pairs-out "$tmp/exact.csv"
-    "$root/build/dpts-eval" --quiet "$@" --dem "$dem" --mesh "$tmp/s.ply" \
+    "$root/build/dpts-eval" --quiet ${args[@]+"${args[@]}"} --dem "$dem" --mesh "$tmp/s.ply" \
       --pairs-out "$tmp/approx.csv"
     python3 - "$tmp/exact.csv" "$tmp/approx.csv" "$mode" "$keep" <<'EOF'
 import csv, sys
