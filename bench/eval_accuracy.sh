@@ -28,9 +28,9 @@ echo "mode,keep,pairs,mean_err_T,max_err_T,mean_err_S,max_err_S,measure_exact,me
 for mode in ${MODES:-qem vp vp-meta pld-meta qslim}; do
   for keep in ${KEEPS:-10 50}; do
     "$root/build/dpts-par" --quiet --algo "$mode" --keep "$keep%" "$dem" "$tmp/s.ply"
-    "$root/build/dpts-eval" --quiet --exact ${exact_args[@]+"${exact_args[@]}"} --dem "$dem" --mesh "$tmp/s.ply" \
+    "$root/build/dpts-eval" --quiet --exact "${exact_args[@]}" --dem "$dem" --mesh "$tmp/s.ply" \
       --pairs-out "$tmp/exact.csv"
-    "$root/build/dpts-eval" --quiet ${args[@]+"${args[@]}"} --dem "$dem" --mesh "$tmp/s.ply" \
+    "$root/build/dpts-eval" --quiet "${args[@]}" --dem "$dem" --mesh "$tmp/s.ply" \
       --pairs-out "$tmp/approx.csv"
     python3 - "$tmp/exact.csv" "$tmp/approx.csv" "$mode" "$keep" <<'EOF'
 import csv, sys
