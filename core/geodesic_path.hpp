@@ -17,6 +17,15 @@
 
 namespace dpts::core {
 
+// A straightened path seen from above, for trying the same pair on another mesh, from source
+// to target, neither end included: the mesh vertices it bends at, in order (empty: straight);
+// and the taut path itself, where it crosses the edges of its strip of faces, thinned to the
+// points it cannot do without (the rest within 5 % of the graph's delta of it), bends
+// included.
+struct PathRoute {
+  std::vector<std::array<double, 2>> bends, taut;
+};
+
 // Per-thread scratch for straightening the paths of one SteinerGraph (read-only, shared).
 class PathStraightener {
  public:
@@ -37,11 +46,11 @@ class PathStraightener {
   // both; the graph's error may have ranked the longer first; a path that joins one tried
   // already a few nodes back from the target's face is not tried). Infinity where the target
   // was not reached; the Steiner distance where no path could be straightened.
-  // With route, the shortest one's route into it (the mesh vertices it bends at, seen from
-  // above, in order; empty: straight, or none was straightened), for along() on another mesh.
+  // With route, the shortest one's route into it (both empty where none was straightened),
+  // for along() and follow() on another mesh.
   double shortest(const GeodesicQuery& query, const SurfacePoint& source, std::size_t target,
                   const SurfacePoint& target_point, double steiner_distance,
-                  std::vector<std::array<double, 2>>* route = nullptr);
+                  PathRoute* route = nullptr);
 
   // The length of the locally shortest path from source to target that starts along `route`
   // (points seen from above, in order from source to target, such as another mesh's path
@@ -49,7 +58,15 @@ class PathStraightener {
   // straightened as in length(). Negative where the route leaves the mesh or does not end in
   // the target's face. With bends, the straightened path's route into it (as shortest()).
   double along(const SurfacePoint& source, const std::vector<std::array<double, 2>>& route,
-               const SurfacePoint& target, std::vector<std::array<double, 2>>* bends = nullptr);
+               const SurfacePoint& target, PathRoute* bends = nullptr);
+
+  // The same from the strip of the faces the route crosses (seen from above), not from the
+  // graph nodes nearest its crossings: for a dense route (PathRoute::taut), whose way past
+  // every vertex near it the strip keeps. (A route told by its bends alone is straight between
+  // them from above, which a path on steep ground is not: along() it may pass a vertex on the
+  // other side, and find a shorter path nearby where the meshes differ.)
+  double follow(const SurfacePoint& source, const std::vector<std::array<double, 2>>& route,
+                const SurfacePoint& target);
 
   // What the calls so far did: paths straightened, strips pulled taut (one per pass), vertices
   // rerouted around, and paths that could not be straightened.
@@ -92,10 +109,13 @@ class PathStraightener {
   static std::size_t hinge_slot(std::uint32_t f) { return (f * 2654435761u) >> (32 - kHingeBits); }
   static constexpr int kHingeBits = 13;
 
-  // The vertices the last taut path bent at, seen from above, into route.
-  void bends_route(std::vector<std::array<double, 2>>& route) const;
+  // The last taut path's route (from source to target), into route.
+  void taut_route(PathRoute& route) const;
   bool build_strip(const SurfacePoint& source, const std::vector<std::uint32_t>& nodes,
                    const SurfacePoint& target);
+  // The strip pulled taut from source to target and rerouted round vertices until locally
+  // shortest (length() once the strip is built); negative where it cannot be unfolded.
+  double pull_taut(const SurfacePoint& source, const SurfacePoint& target);
   void push_face(std::uint32_t f);
   bool walk_around(std::uint32_t v, std::uint32_t from, std::uint32_t to, bool shortest,
                    std::uint32_t avoid, std::vector<std::uint32_t>& fan) const;
@@ -122,6 +142,7 @@ class PathStraightener {
   std::vector<Bend> bends_;
   std::vector<std::uint32_t> path_, around_, tried_, on_paths_;
   Stats stats_;
+  std::array<double, 2> source_xy_{}, target_xy_{};  // the last taut path's ends
 };
 
 }  // namespace dpts::core

@@ -33,6 +33,8 @@ struct PairRoutes {
   // Pair a < b at a * K + b: the mesh vertices its path bends at, from a to b, then b (empty:
   // none).
   std::vector<std::vector<std::array<float, 2>>> xy;
+  // The same path's taut points (core::PathRoute::taut), from a to b, then b (empty: none).
+  std::vector<std::vector<std::array<float, 2>>> taut;
 };
 
 // How pairwise_distances works, and whom it tells of its progress.
@@ -86,8 +88,9 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
                                        PairwiseStats* stats = nullptr);
 // Each pair's distance (distances[a * K + b], a < b, as pairwise_distances gives them) lowered
 // to its length along the pair's route in `routes` (found on another mesh of the same points:
-// PathStraightener::along) where that is shorter, beyond rounding; returns how many were. Where
-// the search on one mesh took the longer of two near-equal routes, the other's mostly did not.
+// PathStraightener::along its bends and PathStraightener::follow its taut points, the shorter)
+// where that is shorter, beyond rounding; returns how many were. Where the search on one mesh
+// took the longer of two near-equal routes, the other's mostly did not.
 // In parallel; the same figures for any thread count.
 std::size_t shorten_along(const core::SteinerGraph& graph,
                           const std::vector<core::SurfacePoint>& points, const PairRoutes& routes,

@@ -119,8 +119,11 @@ TEST_CASE("a path along a given route is pulled taut: the segment on a plane",
       const std::vector<std::array<double, 2>> route{{mx + side, my}};
       CHECK(s.along(pts[i], route, pts[j]) == Approx(dist3(pts[i], pts[j])).epsilon(1e-9));
       CHECK(s.along(pts[i], {}, pts[j]) == Approx(dist3(pts[i], pts[j])).epsilon(1e-9));
+      CHECK(s.follow(pts[i], route, pts[j]) == Approx(dist3(pts[i], pts[j])).epsilon(1e-9));
+      CHECK(s.follow(pts[i], {}, pts[j]) == Approx(dist3(pts[i], pts[j])).epsilon(1e-9));
       const std::vector<std::array<double, 2>> off{{kPlaneX0 - 100, my}};
       CHECK(s.along(pts[i], off, pts[j]) < 0);
+      CHECK(s.follow(pts[i], off, pts[j]) < 0);
     }
   }
 }
@@ -152,9 +155,52 @@ TEST_CASE("a route through a corner of the outline turns there into the faces ah
   const std::vector<std::array<double, 2>> corner{{50, -50}};
   CHECK(s.along(a->point, corner, b->point) == Approx(expected).epsilon(1e-9));
   CHECK(s.along(b->point, corner, a->point) == Approx(expected).epsilon(1e-9));
+  CHECK(s.follow(a->point, corner, b->point) == Approx(expected).epsilon(1e-9));
+  CHECK(s.follow(b->point, corner, a->point) == Approx(expected).epsilon(1e-9));
   // A route cutting across the missing quarter leaves the mesh: no path.
   const std::vector<std::array<double, 2>> across{{60, -40}};
   CHECK(s.along(a->point, across, b->point) < 0);
+  CHECK(s.follow(a->point, across, b->point) < 0);
+}
+
+TEST_CASE("a straightened path's taut route, followed, gives the path back, also on cliffs",
+          "[core][geodesic][exact]") {
+  // The synthetic volcano of bench/synthetic_dems.py: a cone with a crater and a 150 m deep
+  // canyon four 30 m cells wide, walls from one cell to the next. Every pair's straightened
+  // path, told by its taut points (PathRoute::taut: thinned to 5 % of delta) and followed on
+  // the same mesh, comes out as long as it was: the same strip of faces. (Told by its bends
+  // alone, straight from above between them, 16 of these 435 paths came out up to 0.2 %
+  // longer: on the walls a path seen from above is far from straight.)
+  const auto m = grid_surface(120, 120, 30.0, [](double x, double y) {
+    const double c = x / 30 - 60, r = -y / 30 - 60, d = std::hypot(c, r);
+    const double h = 400 * std::exp(-(d / 35) * (d / 35)) - 250 * std::exp(-(d / 10) * (d / 10));
+    return std::abs(c - 0.3 * r - 20) < 2 && r > 0 ? h - 150 : h;
+  });
+  const core::SteinerGraph g(m, 0.5 * core::mean_edge_length(m));
+  const auto pts = core::sample_uniform(m, 30, 5);
+  core::GeodesicQuery q(g);
+  q.set_anchored(true);
+  core::PathStraightener s(g);
+  std::size_t exact = 0, pairs = 0;
+  for (std::size_t i = 0; i + 1 < pts.size(); ++i) {
+    const std::vector<core::SurfacePoint> targets(pts.begin() + static_cast<std::ptrdiff_t>(i) + 1,
+                                                  pts.end());
+    std::vector<double> d;
+    q.distances(pts[i], targets, d);
+    for (std::size_t j = 0; j < targets.size(); ++j) {
+      CAPTURE(i, j);
+      core::PathRoute route;
+      const double len = s.shortest(q, pts[i], j, targets[j], d[j], &route);
+      const double followed = s.follow(pts[i], route.taut, targets[j]);
+      // note: both are real paths; a followed one a hair shorter found a hair more.
+      CHECK(followed >= len * (1 - 1e-6));
+      CHECK(followed <= len * (1 + 1e-4));
+      exact += std::abs(followed - len) <= len * 1e-9;
+      ++pairs;
+    }
+  }
+  // note: thinned, a few taut routes pass a vertex the path grazed on its other side.
+  CHECK(exact >= pairs * 9 / 10);
 }
 
 TEST_CASE("straightened paths over a ridge and a valley are straight when unfolded",
