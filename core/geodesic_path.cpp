@@ -24,6 +24,11 @@ constexpr int kJoinSteps = 8;
 // to 0.2; at 0.5, and with every second crossing kept, up to 15 % high again.
 constexpr double kTautTolerance = 0.05;
 
+// Twice the signed area of triangle (a, b, c) seen from above: > 0 counter-clockwise.
+double orient2(std::array<double, 2> a, std::array<double, 2> b, std::array<double, 2> c) {
+  return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+}
+
 struct Vec3 {
   double x, y, z;
 };
@@ -461,6 +466,49 @@ double PathStraightener::shortest(const GeodesicQuery& query, const SurfacePoint
   return std::isfinite(best) ? best : steiner_distance;
 }
 
+std::array<double, 2> PathStraightener::vertex_xy(std::uint32_t v) const {
+  const TriMesh& m = g_.mesh();
+  return {m.xyz[3 * v], m.xyz[3 * v + 1]};
+}
+
+std::uint32_t PathStraightener::face_toward(std::uint32_t v, std::array<double, 2> q) const {
+  const TriMesh& m = g_.mesh();
+  std::uint32_t found = SteinerGraph::kNoFace;
+  const auto o = vertex_xy(v);
+  g_.for_each_face_of_vertex(v, [&](std::uint32_t g) {
+    if (found != SteinerGraph::kNoFace) return;
+    const auto& c = m.faces[g];
+    const int i = c[0] == v ? 0 : c[1] == v ? 1 : 2;
+    const auto a = vertex_xy(c[(i + 1) % 3]), b = vertex_xy(c[(i + 2) % 3]);
+    const double sign = orient2(o, a, b) < 0 ? -1.0 : 1.0;
+    if (sign * orient2(o, a, q) >= 0 && sign * orient2(o, q, b) >= 0) found = g;
+  });
+  return found;
+}
+
+int PathStraightener::edge_to(std::uint32_t f, std::uint32_t g) const {
+  int edge = -1;
+  for (int i = 0; i < 3; ++i) {
+    if (g_.across(f, i) == g) edge = i;
+  }
+  return edge;
+}
+
+int PathStraightener::exit_edge(std::uint32_t f, int entry, std::array<double, 2> p,
+                                std::array<double, 2> q, double& ta, double& tb) const {
+  const auto& c = g_.mesh().faces[f];
+  const double sign = orient2(vertex_xy(c[0]), vertex_xy(c[1]), vertex_xy(c[2])) < 0 ? -1.0 : 1.0;
+  for (int i = 0; i < 3; ++i) {
+    if (i == entry) continue;
+    const auto a = vertex_xy(c[i]), b = vertex_xy(c[(i + 1) % 3]);
+    if (!(sign * orient2(a, b, q) < 0)) continue;  // q not beyond this edge
+    ta = orient2(p, q, a);
+    tb = orient2(p, q, b);
+    if ((ta <= 0 && tb >= 0) || (ta >= 0 && tb <= 0)) return i;
+  }
+  return -1;
+}
+
 void PathStraightener::taut_route(PathRoute& route) const {
   const TriMesh& m = g_.mesh();
   route.bends.clear();
@@ -533,10 +581,7 @@ double PathStraightener::follow(const SurfacePoint& source,
                                 const SurfacePoint& target) {
   ++stats_.paths;
   const TriMesh& m = g_.mesh();
-  auto xy = [&](std::uint32_t v) { return std::array<double, 2>{m.xyz[3 * v], m.xyz[3 * v + 1]}; };
-  auto orient = [](std::array<double, 2> a, std::array<double, 2> b, std::array<double, 2> c) {
-    return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
-  };
+  auto xy = [&](std::uint32_t v) { return vertex_xy(v); };
   // The strip is the faces the route crosses, walked straight (seen from above) from point to
   // point: the route's own way past every vertex, which the taut path then keeps unless a
   // vertex's other side is shorter. note: on a synthetic volcano (bench/synthetic_dems.py),
@@ -549,21 +594,7 @@ double PathStraightener::follow(const SurfacePoint& source,
   std::uint32_t f = source.face;
   int entry = -1;
   std::size_t steps = 0;
-  // The face around vertex v whose corner at v holds the direction to q (kNoFace: none, q
-  // beyond the outline there).
-  auto toward = [&](std::uint32_t v, std::array<double, 2> q) {
-    std::uint32_t found = SteinerGraph::kNoFace;
-    const auto o = xy(v);
-    g_.for_each_face_of_vertex(v, [&](std::uint32_t g) {
-      if (found != SteinerGraph::kNoFace) return;
-      const auto& c = m.faces[g];
-      const int i = c[0] == v ? 0 : c[1] == v ? 1 : 2;
-      const auto a = xy(c[(i + 1) % 3]), b = xy(c[(i + 2) % 3]);
-      const double sign = orient(o, a, b) < 0 ? -1.0 : 1.0;
-      if (sign * orient(o, a, q) >= 0 && sign * orient(o, q, b) >= 0) found = g;
-    });
-    return found;
-  };
+  auto toward = [&](std::uint32_t v, std::array<double, 2> q) { return face_toward(v, q); };
   // From f to face g around their common corner v (the side with fewer faces between).
   auto around = [&](std::uint32_t v, std::uint32_t g) {
     if (g == f) return true;
@@ -590,18 +621,8 @@ double PathStraightener::follow(const SurfacePoint& source,
     entry = -1;
     if (!pivot(p, q)) return false;
     for (;;) {
-      const auto& c = m.faces[f];
-      const double sign = orient(xy(c[0]), xy(c[1]), xy(c[2])) < 0 ? -1.0 : 1.0;
-      int exit = -1;
       double ta = 0, tb = 0;
-      for (int i = 0; i < 3 && exit < 0; ++i) {
-        if (i == entry) continue;
-        const auto a = xy(c[i]), b = xy(c[(i + 1) % 3]);
-        if (!(sign * orient(a, b, q) < 0)) continue;  // q not beyond this edge
-        ta = orient(p, q, a);
-        tb = orient(p, q, b);
-        if ((ta <= 0 && tb >= 0) || (ta >= 0 && tb <= 0)) exit = i;
-      }
+      const int exit = exit_edge(f, entry, p, q, ta, tb);
       if (exit < 0) return true;  // q is in f
       if (++steps > m.faces.size()) return false;
       std::uint32_t next = g_.across(f, exit);
@@ -614,10 +635,7 @@ double PathStraightener::follow(const SurfacePoint& source,
         continue;
       }
       if (next == SteinerGraph::kNoFace) return false;
-      entry = -1;
-      for (int i = 0; i < 3; ++i) {
-        if (g_.across(next, i) == f) entry = i;
-      }
+      entry = edge_to(next, f);
       push_face(next);
       f = next;
     }
@@ -635,9 +653,7 @@ double PathStraightener::follow(const SurfacePoint& source,
   if (f != target.face) {
     // The target on an edge or a corner of the face the walk ended in (its own face holds it
     // too): into its face across that edge, or around that corner.
-    bool adjacent = false;
-    for (int i = 0; i < 3; ++i) adjacent = adjacent || g_.across(f, i) == target.face;
-    if (adjacent) {
+    if (edge_to(f, target.face) >= 0) {
       push_face(target.face);
       f = target.face;
     } else {
@@ -660,10 +676,7 @@ double PathStraightener::along(const SurfacePoint& source,
     bends->taut.clear();
   }
   const TriMesh& m = g_.mesh();
-  auto xy = [&](std::uint32_t v) { return std::array<double, 2>{m.xyz[3 * v], m.xyz[3 * v + 1]}; };
-  auto orient = [](std::array<double, 2> a, std::array<double, 2> b, std::array<double, 2> c) {
-    return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
-  };
+  auto xy = [&](std::uint32_t v) { return vertex_xy(v); };
   // Walks straight (seen from above) from p to q across the faces from f, appending the node
   // nearest each edge crossed; f ends as q's face. note: a walk that does not reach q within
   // as many steps as the mesh has faces is given up (a degenerate face).
@@ -672,21 +685,7 @@ double PathStraightener::along(const SurfacePoint& source,
   std::uint32_t f = source.face;
   int entry = -1;
   std::size_t steps = 0;
-  // The face around vertex v whose corner at v holds the direction to q (kNoFace: none, q
-  // beyond the outline there).
-  auto toward = [&](std::uint32_t v, std::array<double, 2> q) {
-    std::uint32_t found = SteinerGraph::kNoFace;
-    const auto o = xy(v);
-    g_.for_each_face_of_vertex(v, [&](std::uint32_t g) {
-      if (found != SteinerGraph::kNoFace) return;
-      const auto& c = m.faces[g];
-      const int i = c[0] == v ? 0 : c[1] == v ? 1 : 2;
-      const auto a = xy(c[(i + 1) % 3]), b = xy(c[(i + 2) % 3]);
-      const double sign = orient(o, a, b) < 0 ? -1.0 : 1.0;
-      if (sign * orient(o, a, q) >= 0 && sign * orient(o, q, b) >= 0) found = g;
-    });
-    return found;
-  };
+  auto toward = [&](std::uint32_t v, std::array<double, 2> q) { return face_toward(v, q); };
   // Where p is a corner of f (a route point on a vertex, or a crossing through one), f becomes
   // the face around it the segment to q leaves through: the face it came by may lie on another
   // side (a vertex of the outline, a sharp turn).
@@ -706,18 +705,8 @@ double PathStraightener::along(const SurfacePoint& source,
     entry = -1;
     pivot(p, q);
     for (;;) {
-      const auto& c = m.faces[f];
-      const double sign = orient(xy(c[0]), xy(c[1]), xy(c[2])) < 0 ? -1.0 : 1.0;
-      int exit = -1;
       double ta = 0, tb = 0;
-      for (int i = 0; i < 3 && exit < 0; ++i) {
-        if (i == entry) continue;
-        const auto a = xy(c[i]), b = xy(c[(i + 1) % 3]);
-        if (!(sign * orient(a, b, q) < 0)) continue;  // q not beyond this edge
-        ta = orient(p, q, a);
-        tb = orient(p, q, b);
-        if ((ta <= 0 && tb >= 0) || (ta >= 0 && tb <= 0)) exit = i;
-      }
+      const int exit = exit_edge(f, entry, p, q, ta, tb);
       if (exit < 0) return true;  // q is in f
       if (++steps > m.faces.size()) return false;
       // The crossing, as a fraction of the edge from corner `exit`; the node nearest it.
@@ -737,10 +726,7 @@ double PathStraightener::along(const SurfacePoint& source,
         continue;
       }
       if (next == SteinerGraph::kNoFace) return false;
-      entry = -1;
-      for (int i = 0; i < 3; ++i) {
-        if (g_.across(next, i) == f) entry = i;
-      }
+      entry = edge_to(next, f);
       f = next;
     }
   };

@@ -109,6 +109,17 @@ class PathStraightener {
   static std::size_t hinge_slot(std::uint32_t f) { return (f * 2654435761u) >> (32 - kHingeBits); }
   static constexpr int kHingeBits = 13;
 
+  // Vertex v seen from above.
+  std::array<double, 2> vertex_xy(std::uint32_t v) const;
+  // The face around vertex v whose corner at v holds the direction to q, seen from above
+  // (SteinerGraph::kNoFace: none, q beyond the outline there).
+  std::uint32_t face_toward(std::uint32_t v, std::array<double, 2> q) const;
+  // The edge of face f across which face g lies (-1: none).
+  int edge_to(std::uint32_t f, std::uint32_t g) const;
+  // The edge of face f, but `entry`, that segment p -> q leaves f through, seen from above (-1:
+  // q is in f), with its corners' sides of the segment (orientations) in ta and tb.
+  int exit_edge(std::uint32_t f, int entry, std::array<double, 2> p, std::array<double, 2> q,
+                double& ta, double& tb) const;
   // The last taut path's route (from source to target), into route.
   void taut_route(PathRoute& route) const;
   bool build_strip(const SurfacePoint& source, const std::vector<std::uint32_t>& nodes,
