@@ -513,10 +513,7 @@ void PathStraightener::taut_route(PathRoute& route) const {
   const TriMesh& m = g_.mesh();
   route.bends.clear();
   route.taut.clear();
-  auto vertex = [&](std::uint32_t v) {
-    return std::array<double, 2>{m.xyz[3 * v], m.xyz[3 * v + 1]};
-  };
-  for (const Bend& b : bends_) route.bends.push_back(vertex(b.vertex));
+  for (const Bend& b : bends_) route.bends.push_back(vertex_xy(b.vertex));
   // Every crossing of the taut path with a portal (a bend: its vertex), between the ends.
   std::vector<std::array<double, 2>>& pts = route.taut;
   std::vector<char> keep;
@@ -525,7 +522,7 @@ void PathStraightener::taut_route(PathRoute& route) const {
   std::size_t k = 0;  // the taut path's segment: from taut_[k] to taut_[k + 1]
   for (std::size_t j = 1; j + 1 < portals_.size(); ++j) {
     for (; k < bends_.size() && bends_[k].portal < j; ++k) {
-      pts.push_back(vertex(bends_[k].vertex));
+      pts.push_back(vertex_xy(bends_[k].vertex));
       keep.push_back(1);
     }
     if (k < bends_.size() && bends_[k].portal == j) continue;  // crossed at the bend
@@ -540,7 +537,7 @@ void PathStraightener::taut_route(PathRoute& route) const {
     keep.push_back(0);
   }
   for (; k < bends_.size(); ++k) {
-    pts.push_back(vertex(bends_[k].vertex));
+    pts.push_back(vertex_xy(bends_[k].vertex));
     keep.push_back(1);
   }
   pts.push_back(target_xy_);
@@ -581,7 +578,6 @@ double PathStraightener::follow(const SurfacePoint& source,
                                 const SurfacePoint& target) {
   ++stats_.paths;
   const TriMesh& m = g_.mesh();
-  auto xy = [&](std::uint32_t v) { return vertex_xy(v); };
   // The strip is the faces the route crosses, walked straight (seen from above) from point to
   // point: the route's own way past every vertex, which the taut path then keeps unless a
   // vertex's other side is shorter. note: on a synthetic volcano (bench/synthetic_dems.py),
@@ -594,7 +590,6 @@ double PathStraightener::follow(const SurfacePoint& source,
   std::uint32_t f = source.face;
   int entry = -1;
   std::size_t steps = 0;
-  auto toward = [&](std::uint32_t v, std::array<double, 2> q) { return face_toward(v, q); };
   // From f to face g around their common corner v (the side with fewer faces between).
   auto around = [&](std::uint32_t v, std::uint32_t g) {
     if (g == f) return true;
@@ -609,8 +604,8 @@ double PathStraightener::follow(const SurfacePoint& source,
   // side (a vertex of the outline, a sharp turn).
   auto pivot = [&](std::array<double, 2> p, std::array<double, 2> q) {
     for (std::uint32_t v : m.faces[f]) {
-      if (xy(v) != p) continue;
-      const std::uint32_t g = toward(v, q);
+      if (vertex_xy(v) != p) continue;
+      const std::uint32_t g = face_toward(v, q);
       if (g == SteinerGraph::kNoFace) return true;
       return around(v, g);
     }
@@ -629,7 +624,7 @@ double PathStraightener::follow(const SurfacePoint& source,
       if (next == SteinerGraph::kNoFace && (ta == 0 || tb == 0)) {
         // Through a corner on the outline: on from that corner, into the face ahead.
         const std::uint32_t v = m.faces[f][ta == 0 ? exit : (exit + 1) % 3];
-        next = toward(v, q);
+        next = face_toward(v, q);
         if (next == SteinerGraph::kNoFace || next == f || !around(v, next)) return false;
         entry = -1;
         continue;
@@ -676,7 +671,6 @@ double PathStraightener::along(const SurfacePoint& source,
     bends->taut.clear();
   }
   const TriMesh& m = g_.mesh();
-  auto xy = [&](std::uint32_t v) { return vertex_xy(v); };
   // Walks straight (seen from above) from p to q across the faces from f, appending the node
   // nearest each edge crossed; f ends as q's face. note: a walk that does not reach q within
   // as many steps as the mesh has faces is given up (a degenerate face).
@@ -685,14 +679,13 @@ double PathStraightener::along(const SurfacePoint& source,
   std::uint32_t f = source.face;
   int entry = -1;
   std::size_t steps = 0;
-  auto toward = [&](std::uint32_t v, std::array<double, 2> q) { return face_toward(v, q); };
   // Where p is a corner of f (a route point on a vertex, or a crossing through one), f becomes
   // the face around it the segment to q leaves through: the face it came by may lie on another
   // side (a vertex of the outline, a sharp turn).
   auto pivot = [&](std::array<double, 2> p, std::array<double, 2> q) {
     for (std::uint32_t v : m.faces[f]) {
-      if (xy(v) != p) continue;
-      const std::uint32_t g = toward(v, q);
+      if (vertex_xy(v) != p) continue;
+      const std::uint32_t g = face_toward(v, q);
       if (g == SteinerGraph::kNoFace || g == f) return;
       // note: the path passes through v (the faces between f and g share only v).
       if (nodes.empty() || nodes.back() != v) nodes.push_back(v);
@@ -719,7 +712,7 @@ double PathStraightener::along(const SurfacePoint& source,
       if (next == SteinerGraph::kNoFace && (ta == 0 || tb == 0)) {
         // Through a corner on the outline: on from that corner, into the face ahead.
         const std::uint32_t v = m.faces[f][ta == 0 ? exit : (exit + 1) % 3];
-        next = toward(v, q);
+        next = face_toward(v, q);
         if (next == SteinerGraph::kNoFace || next == f) return false;
         f = next;
         entry = -1;
@@ -738,7 +731,8 @@ double PathStraightener::along(const SurfacePoint& source,
   if (!walk(p, {target.x, target.y})) return -1;
   std::uint32_t at_corner = SteinerGraph::kNoFace;
   for (std::uint32_t v : m.faces[f]) {
-    if (f != target.face && xy(v) == std::array<double, 2>{target.x, target.y}) at_corner = v;
+    if (f != target.face && vertex_xy(v) == std::array<double, 2>{target.x, target.y})
+      at_corner = v;
   }
   if (f != target.face && at_corner != SteinerGraph::kNoFace) {
     // The target on a corner of the face the walk ended in (a vertex, which the target's own
