@@ -136,9 +136,7 @@ bool PathStraightener::build_strip(const SurfacePoint& source,
     }
     if (b == SteinerGraph::kNoFace || !holds(b, u) || !holds(a, u)) return false;
     if (b == a) continue;
-    bool adjacent = false;
-    for (int e = 0; e < 3; ++e) adjacent = adjacent || g_.across(a, e) == b;
-    if (!adjacent) {
+    if (edge_to(a, b) < 0) {
       // The path passes through vertex u: around it, the side with fewer faces.
       if (u >= nv || !walk_around(u, a, b, true, SteinerGraph::kNoFace, fan_)) return false;
       for (std::uint32_t f : fan_) push_face(f);
@@ -741,10 +739,7 @@ double PathStraightener::along(const SurfacePoint& source,
   } else if (f != target.face) {
     // The target on an edge of the face the walk ended in: through the node of their shared
     // edge nearest it.
-    int shared = -1;
-    for (int i = 0; i < 3; ++i) {
-      if (g_.across(f, i) == target.face) shared = i;
-    }
+    const int shared = edge_to(f, target.face);
     if (shared < 0) return -1;
     g_.edge_nodes(f, shared, around_);
     std::uint32_t pick = around_[0];
