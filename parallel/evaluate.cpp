@@ -50,6 +50,12 @@ constexpr std::size_t kPilots = 2;
 // T was left to one-way searches on San Gabriel's 10 % and 1 % meshes; a pair the radii miss
 // is searched one way (slower, as exact).
 constexpr double kEstimateMargin = 1.02;
+// The most memory the routes kept for the other mesh (PairRoutes) take, all sets together, their
+// index apart; the rest go to a temporary file.
+// note: each pair's candidates (up to 3) stored: a set of 100 points on San Gabriel (770k
+// cells) stores about 11 MB of routes on T and 6 MB on its 10 % mesh; they grow with the
+// square of the points.
+constexpr std::size_t kRoutesMemory = std::size_t{32} << 20;
 
 // Squared straight-line (3D) distance between points i and j.
 double straight2(const std::vector<core::SurfacePoint>& points, std::size_t i, std::size_t j) {
@@ -58,40 +64,11 @@ double straight2(const std::vector<core::SurfacePoint>& points, std::size_t i, s
   return dx * dx + dy * dy + dz * dz;
 }
 
-// A pair's route as PairRoutes keeps it: its bends and its taut points.
-struct StoredRoute {
-  std::vector<std::array<float, 2>> bends, taut;
-};
-
-// The route of path i -> j (points seen from above) as PairRoutes keeps it for the pair
-// min(i, j) < max(i, j): offsets from origin, from the lower to the higher, then that point.
-StoredRoute stored_route(const std::vector<core::SurfacePoint>& points,
-                         const std::array<double, 2>& origin, std::size_t i, std::size_t j,
-                         const core::PathRoute& route) {
-  auto store = [&](const std::vector<std::array<double, 2>>& from) {
-    std::vector<std::array<float, 2>> r;
-    r.reserve(from.size() + 1);
-    for (const auto& p : from) {
-      r.push_back({static_cast<float>(p[0] - origin[0]), static_cast<float>(p[1] - origin[1])});
-    }
-    if (i > j) std::reverse(r.begin(), r.end());
-    const core::SurfacePoint& end = points[std::max(i, j)];
-    r.push_back({static_cast<float>(end.x - origin[0]), static_cast<float>(end.y - origin[1])});
-    return r;
-  };
-  return {store(route.bends), store(route.taut)};
-}
-
-// Pair ab's route into routes.
-void put_route(PairRoutes& routes, std::size_t ab, StoredRoute&& route) {
-  routes.xy[ab] = std::move(route.bends);
-  routes.taut[ab] = std::move(route.taut);
-}
-
-// Empty routes for K points.
-void clear_routes(PairRoutes& routes, std::size_t k) {
-  routes.xy.assign(k * k, {});
-  routes.taut.assign(k * k, {});
+// Path i -> j's route (route) stored in routes for the pair min(i, j) < max(i, j).
+PairRoutes::Id add_route(PairRoutes& routes, const std::vector<core::SurfacePoint>& points,
+                         std::size_t i, std::size_t j, const core::PathRoute& route) {
+  const core::SurfacePoint& end = points[std::max(i, j)];
+  return routes.add(route, i > j, {end.x, end.y});
 }
 
 // Every point but point i, in order.
@@ -168,12 +145,7 @@ void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::Su
   const std::size_t k = points.size();
   // note: routes only with straighten (they are the straightened paths' bends).
   if (!straighten) routes_out = nullptr;
-  std::vector<StoredRoute> reverse_routes;
-  if (routes_out) {
-    routes_out->origin = {points.empty() ? 0.0 : points[0].x, points.empty() ? 0.0 : points[0].y};
-    clear_routes(*routes_out, k);
-    reverse_routes.assign(k * k, {});
-  }
+  std::vector<PairRoutes::Id> reverse_routes(routes_out ? k * k : 0, PairRoutes::kNone);
   const std::vector<std::vector<std::size_t>> assigned = assign_pairs(points, need);
   // note: two searches, each straightened, rank the routes of a pair independently; where the
   // graph's error put one on the longer of two nearly equal routes, the other mostly is not.
@@ -226,11 +198,11 @@ void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::Su
               d[t] = sc->straightener.shortest(sc->query, points[i], t, targets[t], d[t],
                                                routes_out ? &best : nullptr);
               if (routes_out && std::isfinite(d[t])) {
-                auto stored = stored_route(points, routes_out->origin, i, j, best);
+                const PairRoutes::Id id = add_route(*routes_out, points, i, j, best);
                 if (t < own) {
-                  put_route(*routes_out, std::min(i, j) * k + std::max(i, j), std::move(stored));
+                  routes_out->assign(std::min(i, j), std::max(i, j), id);
                 } else {
-                  reverse_routes[i * k + j] = std::move(stored);
+                  reverse_routes[i * k + j] = id;
                 }
               }
             }
@@ -252,10 +224,8 @@ void measure_one_way(const core::SteinerGraph& graph, const std::vector<core::Su
         double& v = out[std::min(i, j) * k + std::max(i, j)];
         if (reverse[i * k + j] < v) {
           v = reverse[i * k + j];
-          if (routes_out) {
-            put_route(*routes_out, std::min(i, j) * k + std::max(i, j),
-                      std::move(reverse_routes[i * k + j]));
-          }
+          if (routes_out)
+            routes_out->assign(std::min(i, j), std::max(i, j), reverse_routes[i * k + j]);
         }
       }
     }
@@ -461,15 +431,11 @@ std::vector<double> meet_straightened(const core::SteinerGraph& graph,
   const std::size_t k = points.size();
   const double inf = std::numeric_limits<double>::infinity();
   std::vector<double> out(k * k, 0.0);
-  const std::array<double, 2> origin{points[0].x, points[0].y};
-  if (routes_out) {
-    routes_out->origin = origin;
-    clear_routes(*routes_out, k);
-  }
   // Each pair's candidates: straightened from i's search (i * k + j), and joined (a < b).
   std::vector<double> direct(k * k, inf), direct_len(k * k, inf), joined_len(k * k, inf);
-  std::vector<StoredRoute> direct_route(routes_out ? k * k : 0),
-      joined_route(routes_out ? k * k : 0);
+  // note: their routes stored as found, each pair given its best at the end.
+  std::vector<PairRoutes::Id> direct_route(routes_out ? k * k : 0, PairRoutes::kNone),
+      joined_route(routes_out ? k * k : 0, PairRoutes::kNone);
   std::vector<std::size_t> settled_by(k, 0);
   tbb::enumerable_thread_specific<std::unique_ptr<core::PathStraightener>> straighteners;
   auto straightener = [&]() -> core::PathStraightener& {
@@ -489,7 +455,7 @@ std::vector<double> meet_straightened(const core::SteinerGraph& graph,
       if (std::isfinite(d[t])) {
         direct_len[i * k + j] =
             st.shortest(q, points[i], t, targets[t], d[t], routes_out ? &best : nullptr);
-        if (routes_out) direct_route[i * k + j] = stored_route(points, origin, i, j, best);
+        if (routes_out) direct_route[i * k + j] = add_route(*routes_out, points, i, j, best);
       }
       ++t;
     }
@@ -610,7 +576,7 @@ std::vector<double> meet_straightened(const core::SteinerGraph& graph,
     const std::size_t ab = std::min(a, i) * k + std::max(a, i);
     joined_len[ab] = len_best;
     if (routes_out && len_best < inf)
-      joined_route[ab] = stored_route(points, origin, a, i, best_bends);
+      joined_route[ab] = add_route(*routes_out, points, a, i, best_bends);
   };
   // Source order[at]: searched, what it settled straightened, its half kept.
   auto search = [&](std::size_t at) {
@@ -683,19 +649,19 @@ std::vector<double> meet_straightened(const core::SteinerGraph& graph,
     for (std::size_t b = a + 1; b < k; ++b) {
       const std::size_t ab = a * k + b, ba = b * k + a;
       double v = inf;
-      StoredRoute* r = nullptr;
-      auto take = [&](double len, StoredRoute* route) {
+      PairRoutes::Id r = PairRoutes::kNone;
+      auto take = [&](double len, PairRoutes::Id route) {
         if (len < v) {
           v = len;
           r = route;
         }
       };
-      take(direct_len[ab], routes_out ? &direct_route[ab] : nullptr);
-      take(direct_len[ba], routes_out ? &direct_route[ba] : nullptr);
-      take(joined_len[ab], routes_out ? &joined_route[ab] : nullptr);
+      take(direct_len[ab], routes_out ? direct_route[ab] : PairRoutes::kNone);
+      take(direct_len[ba], routes_out ? direct_route[ba] : PairRoutes::kNone);
+      take(joined_len[ab], routes_out ? joined_route[ab] : PairRoutes::kNone);
       if (v < inf) {
         out[ab] = v;
-        if (routes_out) put_route(*routes_out, ab, std::move(*r));
+        if (routes_out) routes_out->assign(a, b, r);
       } else {
         left[ab] = 1;
         ++left_count;
@@ -711,17 +677,11 @@ std::vector<double> meet_straightened(const core::SteinerGraph& graph,
     stats.straighten_failed += st->stats().failed;
   }
   if (left_count > 0) {
-    PairRoutes left_routes;
+    // note: it gives the pairs left their routes in routes_out.
     std::vector<double> one_way(k * k, 0.0);
-    measure_one_way(graph, points, left, true, one_way, stats, nullptr,
-                    routes_out ? &left_routes : nullptr);
+    measure_one_way(graph, points, left, true, one_way, stats, nullptr, routes_out);
     for (std::size_t ab = 0; ab < k * k; ++ab) {
-      if (!left[ab]) continue;
-      out[ab] = one_way[ab];
-      if (routes_out) {
-        routes_out->xy[ab] = std::move(left_routes.xy[ab]);
-        routes_out->taut[ab] = std::move(left_routes.taut[ab]);
-      }
+      if (left[ab]) out[ab] = one_way[ab];
     }
   }
   stats.one_way_pairs += left_count;
@@ -741,6 +701,10 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
   std::vector<char> need(k * k, 0);
   for (std::size_t i = 0; i < k; ++i) {
     for (std::size_t j = i + 1; j < k; ++j) need[i * k + j] = 1;
+  }
+  if (options.straighten && options.routes_out) {
+    options.routes_out->reset(
+        k, {points.empty() ? 0.0 : points[0].x, points.empty() ? 0.0 : points[0].y});
   }
   if (options.straighten && method == PairwiseMethod::kMeet && k >= 3) {
     return meet_straightened(graph, points, estimate, options.routes_out, stats, tokens, searched);
@@ -873,29 +837,19 @@ std::size_t shorten_along(const core::SteinerGraph& graph,
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       auto& st = scratch.local();
                       if (!st) st = std::make_unique<core::PathStraightener>(graph);
-                      std::vector<std::array<double, 2>> route;
-                      auto unpack = [&](const std::vector<std::array<float, 2>>& xy) {
-                        route.clear();
-                        for (const auto& p : xy)
-                          route.push_back({routes.origin[0] + p[0], routes.origin[1] + p[1]});
-                      };
+                      std::vector<std::array<double, 2>> bends, taut;
                       for (std::size_t a = r.begin(); a < r.end(); ++a) {
                         for (std::size_t b = a + 1; b < k; ++b) {
                           double& d = distances[a * k + b];
-                          const auto& xy = routes.xy[a * k + b];
-                          if (!std::isfinite(d) || xy.empty()) continue;
+                          if (!std::isfinite(d) || !routes.get(a, b, bends, taut)) continue;
                           // note: both ways, each finding paths the other does not: its bends
                           // snapped to graph nodes (a shorter path nearby, the meshes' faces
                           // differing), and the taut path's own faces (on cliffs, where the
                           // nodes are sparse, the same path: a synthetic volcano's 10 % mesh
                           // measured 24 % high without, 0.1 % with).
-                          unpack(xy);
-                          double len = st->along(points[a], route, points[b]);
-                          if (a * k + b < routes.taut.size() && !routes.taut[a * k + b].empty()) {
-                            unpack(routes.taut[a * k + b]);
-                            const double taut = st->follow(points[a], route, points[b]);
-                            if (taut >= 0 && (len < 0 || taut < len)) len = taut;
-                          }
+                          double len = st->along(points[a], bends, points[b]);
+                          const double followed = st->follow(points[a], taut, points[b]);
+                          if (followed >= 0 && (len < 0 || followed < len)) len = followed;
                           // note: only a shorter route, not the same one rounded otherwise (a mesh
                           // measured against itself gives 0).
                           if (len >= 0 && len < d * (1 - 1e-12)) {
@@ -936,9 +890,13 @@ Geodesics build_exact(const core::TriMesh& original, const core::TriMesh& simpli
 // The Steiner graphs' spacings, their memory and the searches the budget holds, into result.
 // note: the graphs are built one after the other, each freed before the next: the peak holds
 // the larger one and its searches.
+// Straightened, each set's routes on both meshes (PairRoutes) are kept for the other mesh: their
+// pairs' index and the candidates' ids (8 bytes a pair each) count in the budget, and their
+// routes are held in memory up to the budget's slack, at most kRoutesMemory in all (the rest in
+// a temporary file).
 void plan_graphs(const core::TriMesh& original, const core::TriMesh& simplified,
                  const EvalOptions& options, PairwiseMethod& method, std::size_t k_max,
-                 EvalResult& result) {
+                 std::size_t sets, EvalResult& result) {
   // note: the paper's Steiner distances need one delta on both meshes (their bias depends on
   // it); straightened ones are exact but for near ties, whose share depends on the spacing
   // relative to the mesh's own faces, so each mesh gets its own.
@@ -958,11 +916,15 @@ void plan_graphs(const core::TriMesh& original, const core::TriMesh& simplified,
   result.search_bytes = core::GeodesicQuery::estimate_bytes(
       std::max(est_t.nodes, est_s.nodes), std::max(original.faces.size(), simplified.faces.size()),
       k_max, options.straighten);
+  const bool routes = options.straighten;
+  const std::size_t route_index =
+      routes ? (2 * sets + 2) * k_max * k_max * sizeof(PairRoutes::Id) : 0;
+  result.routes_bytes = routes ? route_index + kRoutesMemory : 0;
   if (options.memory_budget_bytes > 0) {
     // note: straightened pairs can be measured one way, one search at a time: slower (each
     // search about twice the graph) but within a budget that two searches do not fit.
     auto need_for = [&](PairwiseMethod m) {
-      return result.graphs_bytes + min_searches(m) * result.search_bytes;
+      return result.graphs_bytes + min_searches(m) * result.search_bytes + route_index;
     };
     if (options.straighten && method == PairwiseMethod::kMeet &&
         need_for(PairwiseMethod::kMeet) > options.memory_budget_bytes &&
@@ -979,9 +941,14 @@ void plan_graphs(const core::TriMesh& original, const core::TriMesh& simplified,
           format_bytes(static_cast<double>(options.memory_budget_bytes)) +
           " available (--max-memory); use a larger --delta");
     }
+    if (routes) {
+      result.routes_bytes =
+          route_index + std::min(kRoutesMemory, (options.memory_budget_bytes - need) / 2);
+    }
     const std::size_t threads = worker_threads();
     result.max_searches =
-        std::min((options.memory_budget_bytes - result.graphs_bytes) / result.search_bytes,
+        std::min((options.memory_budget_bytes - result.graphs_bytes - result.routes_bytes) /
+                     result.search_bytes,
                  unbounded_searches(threads, options.straighten));
   }
 }
@@ -1153,7 +1120,7 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
   if (options.exact) {
     geo = build_exact(original, simplified, stage);
   } else {
-    plan_graphs(original, simplified, options, method, k_max, result);
+    plan_graphs(original, simplified, options, method, k_max, sets, result);
   }
   const core::PointLocator locate_s(simplified);
   std::optional<core::PointLocator> locate_t;
@@ -1190,7 +1157,18 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
   // Straightened: each set's pairs' paper Steiner distances on T' (one quick search a source),
   // from which the meeting radii on both meshes are scaled.
   std::vector<std::vector<double>> guess(routes ? sets : 0);
-  std::vector<PairRoutes> routes_t(routes ? sets : 0), routes_s(routes ? sets : 0);
+  // note: at most 2 x sets of them hold routes at once (each set's on T' until T's stage has
+  // tried them, those on T until the end), each within its share of the memory planned.
+  std::vector<PairRoutes> routes_t, routes_s;
+  if (routes) {
+    const std::size_t index = (2 * sets + 2) * k_max * k_max * sizeof(PairRoutes::Id);
+    const std::size_t share =
+        (result.routes_bytes - std::min(result.routes_bytes, index)) / (2 * sets);
+    for (std::size_t set = 0; set < sets; ++set) {
+      routes_t.emplace_back(share);
+      routes_s.emplace_back(share);
+    }
+  }
   const std::string kind = options.exact ? ": exact geodesics on T" : ": geodesics on T";
   for (const bool mesh_t : {false, true}) {
     if (!options.exact) {

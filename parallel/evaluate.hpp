@@ -10,6 +10,7 @@
 
 #include "core/progress.hpp"
 #include "core/steiner_graph.hpp"
+#include "parallel/pair_routes.hpp"
 
 namespace dpts::par {
 
@@ -24,17 +25,6 @@ enum class PairwiseMethod {
   // through that node, the earlier search's part told by the nodes it bends at). Pairs the
   // radii turn out too short for are measured one way. About a third of the graph per query.
   kMeet,
-};
-
-// Each pair's path seen from above, as the search on one mesh found it: for the search of the
-// same points on another mesh to try too (PairwiseOptions::routes_in).
-struct PairRoutes {
-  std::array<double, 2> origin{};  // the points are offsets from here (floats: 8 bytes each)
-  // Pair a < b at a * K + b: the mesh vertices its path bends at, from a to b, then b (empty:
-  // none).
-  std::vector<std::vector<std::array<float, 2>>> xy;
-  // The same path's taut points (core::PathRoute::taut), from a to b, then b (empty: none).
-  std::vector<std::vector<std::array<float, 2>>> taut;
 };
 
 // How pairwise_distances works, and whom it tells of its progress.
@@ -166,6 +156,9 @@ struct EvalResult {
   // search on it; and how many searches the memory budget let exist at once (0: no bound). All
   // 0 with exact geodesics.
   std::size_t graphs_bytes = 0, search_bytes = 0, max_searches = 0;
+  // Straightened: memory of the routes kept for the other mesh (PairRoutes): their index and
+  // what of them is kept in memory (the rest in a temporary file).
+  std::size_t routes_bytes = 0;
   bool exact = false;  // the geodesics were exact (EvalOptions::exact)
   // Steiner paths straightened (EvalOptions::straighten), on T and on T' together: the paths,
   // and those that could not be (a degenerate face: their Steiner length kept); the strips

@@ -219,8 +219,11 @@ TEST_CASE("straightened, meeting in the middle measures what one-way searches me
         sum += d[i * k + j] / ref[i * k + j] - 1;
         same += std::fabs(d[i * k + j] / ref[i * k + j] - 1) < 1e-9;
         // Its route, for the other mesh: ends at point j.
-        REQUIRE_FALSE(routes.xy[i * k + j].empty());
-        CHECK(routes.xy[i * k + j].back()[0] == static_cast<float>(points[j].x - routes.origin[0]));
+        std::vector<std::array<double, 2>> bends, taut;
+        REQUIRE(routes.get(i, j, bends, taut));
+        REQUIRE_FALSE(bends.empty());
+        CHECK(bends.back()[0] ==
+              routes.origin()[0] + static_cast<float>(points[j].x - routes.origin()[0]));
       }
     }
     const double pairs = static_cast<double>(k * (k - 1) / 2);
