@@ -176,6 +176,7 @@ std::string Evaluation::json(const EvalRequest& request, int threads, double sec
       .add("snapped_points", r.snapped)
       .add("memory_graphs_bytes", r.graphs_bytes)
       .add("memory_search_bytes", r.search_bytes)
+      .add("memory_pairs_bytes", r.pairs_bytes)
       .add("memory_routes_bytes", r.routes_bytes)
       .add("max_searches", r.max_searches)
       .add("faces_not_ccw", validity.clockwise_or_flat)

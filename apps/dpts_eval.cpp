@@ -123,9 +123,10 @@ cell centre.
                      start); each search needs 36 bytes per Steiner node (12 with --steiner),
                      so fewer threads search at once when all do not fit; where two do not,
                      the pairs are searched one way (about twice the time); a run that does
-                     not fit with one is refused before the graphs are built; the pairs' routes
-                     kept for the other mesh past 32 MB (or the memory left) go to an unnamed
-                     file in TMPDIR (else /tmp)
+                     not fit with one is refused before the graphs are built; the pairs'
+                     arrays (8 x (5 x S + 10) bytes a pair) count too, and their routes kept
+                     for the other mesh past 8 MB (or the memory left) go to an unnamed file
+                     in TMPDIR (else /tmp)
   --json             print one JSON object with all figures as the last line
   --quiet            only the JSON line (or nothing but errors)
   --help, --version
@@ -392,9 +393,10 @@ void print_report(const Options& o, const dpts::api::Evaluation& ev, double secs
                        : "no bound on searches";
     const std::string routes =
         r.routes_bytes ? ", routes " + par::format_bytes(static_cast<double>(r.routes_bytes)) : "";
-    std::printf("memory           the larger graph about %s, a search %s%s (%s)\n",
+    std::printf("memory           the larger graph about %s, a search %s, the pairs %s%s (%s)\n",
                 par::format_bytes(static_cast<double>(r.graphs_bytes)).c_str(),
-                par::format_bytes(static_cast<double>(r.search_bytes)).c_str(), routes.c_str(),
+                par::format_bytes(static_cast<double>(r.search_bytes)).c_str(),
+                par::format_bytes(static_cast<double>(r.pairs_bytes)).c_str(), routes.c_str(),
                 bound.c_str());
     std::printf(
         "searched         %.1f %% of T, %.1f %% of T' per query on average (pairs measured one "

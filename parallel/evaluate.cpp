@@ -55,7 +55,15 @@ constexpr double kEstimateMargin = 1.02;
 // note: each pair's candidates (up to 3) stored: a set of 100 points on San Gabriel (770k
 // cells) stores about 11 MB of routes on T and 6 MB on its 10 % mesh; they grow with the
 // square of the points.
-constexpr std::size_t kRoutesMemory = std::size_t{32} << 20;
+constexpr std::size_t kRoutesMemory = std::size_t{8} << 20;
+
+// The pairs' arrays of a run of `sets` sets of k points, in bytes: every set's distances on both
+// meshes (and, straightened, the guess and the routes' index on both), and a stage's own (its
+// candidates' lengths and routes, the pairs left one way, the ride-along distances).
+std::size_t pair_array_bytes(std::size_t k, std::size_t sets, bool straightened) {
+  const std::size_t per_set = straightened ? 5 : 2, per_stage = straightened ? 10 : 4;
+  return (per_set * sets + per_stage) * k * k * sizeof(double);
+}
 
 // Squared straight-line (3D) distance between points i and j.
 double straight2(const std::vector<core::SurfacePoint>& points, std::size_t i, std::size_t j) {
@@ -890,10 +898,9 @@ Geodesics build_exact(const core::TriMesh& original, const core::TriMesh& simpli
 // The Steiner graphs' spacings, their memory and the searches the budget holds, into result.
 // note: the graphs are built one after the other, each freed before the next: the peak holds
 // the larger one and its searches.
-// Straightened, each set's routes on both meshes (PairRoutes) are kept for the other mesh: their
-// pairs' index and the candidates' ids (8 bytes a pair each) count in the budget, and their
-// routes are held in memory up to the budget's slack, at most kRoutesMemory in all (the rest in
-// a temporary file).
+// The pairs' arrays count in the budget too (pairs_bytes), and straightened, each set's routes on
+// both meshes (PairRoutes), kept for the other mesh, are held in memory up to half the budget's
+// slack, at most kRoutesMemory in all (routes_bytes; the rest in a temporary file).
 void plan_graphs(const core::TriMesh& original, const core::TriMesh& simplified,
                  const EvalOptions& options, PairwiseMethod& method, std::size_t k_max,
                  std::size_t sets, EvalResult& result) {
@@ -917,14 +924,13 @@ void plan_graphs(const core::TriMesh& original, const core::TriMesh& simplified,
       std::max(est_t.nodes, est_s.nodes), std::max(original.faces.size(), simplified.faces.size()),
       k_max, options.straighten);
   const bool routes = options.straighten;
-  const std::size_t route_index =
-      routes ? (2 * sets + 2) * k_max * k_max * sizeof(PairRoutes::Id) : 0;
-  result.routes_bytes = routes ? route_index + kRoutesMemory : 0;
+  result.pairs_bytes = pair_array_bytes(k_max, sets, routes);
+  result.routes_bytes = routes ? kRoutesMemory : 0;
   if (options.memory_budget_bytes > 0) {
     // note: straightened pairs can be measured one way, one search at a time: slower (each
     // search about twice the graph) but within a budget that two searches do not fit.
     auto need_for = [&](PairwiseMethod m) {
-      return result.graphs_bytes + min_searches(m) * result.search_bytes + route_index;
+      return result.graphs_bytes + min_searches(m) * result.search_bytes + result.pairs_bytes;
     };
     if (options.straighten && method == PairwiseMethod::kMeet &&
         need_for(PairwiseMethod::kMeet) > options.memory_budget_bytes &&
@@ -937,19 +943,19 @@ void plan_graphs(const core::TriMesh& original, const core::TriMesh& simplified,
           "the geodesics need about " + format_bytes(static_cast<double>(need)) +
           " (a Steiner graph of " + format_bytes(static_cast<double>(result.graphs_bytes)) + ", " +
           std::to_string(min_searches(method)) + " searches of " +
-          format_bytes(static_cast<double>(result.search_bytes)) + "), more than the " +
+          format_bytes(static_cast<double>(result.search_bytes)) + ", the pairs' arrays " +
+          format_bytes(static_cast<double>(result.pairs_bytes)) + "), more than the " +
           format_bytes(static_cast<double>(options.memory_budget_bytes)) +
-          " available (--max-memory); use a larger --delta");
+          " available (--max-memory); use a larger --delta or fewer --points");
     }
     if (routes) {
-      result.routes_bytes =
-          route_index + std::min(kRoutesMemory, (options.memory_budget_bytes - need) / 2);
+      result.routes_bytes = std::min(kRoutesMemory, (options.memory_budget_bytes - need) / 2);
     }
     const std::size_t threads = worker_threads();
-    result.max_searches =
-        std::min((options.memory_budget_bytes - result.graphs_bytes - result.routes_bytes) /
-                     result.search_bytes,
-                 unbounded_searches(threads, options.straighten));
+    result.max_searches = std::min((options.memory_budget_bytes - result.graphs_bytes -
+                                    result.pairs_bytes - result.routes_bytes) /
+                                       result.search_bytes,
+                                   unbounded_searches(threads, options.straighten));
   }
 }
 
@@ -1161,9 +1167,7 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
   // tried them, those on T until the end), each within its share of the memory planned.
   std::vector<PairRoutes> routes_t, routes_s;
   if (routes) {
-    const std::size_t index = (2 * sets + 2) * k_max * k_max * sizeof(PairRoutes::Id);
-    const std::size_t share =
-        (result.routes_bytes - std::min(result.routes_bytes, index)) / (2 * sets);
+    const std::size_t share = result.routes_bytes / (2 * sets);
     for (std::size_t set = 0; set < sets; ++set) {
       routes_t.emplace_back(share);
       routes_s.emplace_back(share);

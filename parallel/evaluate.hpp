@@ -156,9 +156,10 @@ struct EvalResult {
   // search on it; and how many searches the memory budget let exist at once (0: no bound). All
   // 0 with exact geodesics.
   std::size_t graphs_bytes = 0, search_bytes = 0, max_searches = 0;
-  // Straightened: memory of the routes kept for the other mesh (PairRoutes): their index and
-  // what of them is kept in memory (the rest in a temporary file).
-  std::size_t routes_bytes = 0;
+  // Memory of the pairs' arrays (their distances on both meshes, every set's), and,
+  // straightened, of the routes kept for the other mesh (PairRoutes) in memory (the rest in a
+  // temporary file). Both counted in the budget.
+  std::size_t pairs_bytes = 0, routes_bytes = 0;
   bool exact = false;  // the geodesics were exact (EvalOptions::exact)
   // Steiner paths straightened (EvalOptions::straighten), on T and on T' together: the paths,
   // and those that could not be (a degenerate face: their Steiner length kept); the strips

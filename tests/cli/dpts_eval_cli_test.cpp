@@ -100,7 +100,8 @@ TEST_CASE("dpts-eval keeps to --max-memory or refuses in one line", "[cli][eval]
   const auto fine = with({"--max-memory", "200", "--delta", "0.0001"});
   CHECK(fine.exit_code == 1);
   CHECK(fine.err.rfind("dpts-eval: error: the geodesics need about ", 0) == 0);
-  CHECK(fine.err.find("available (--max-memory); use a larger --delta\n") != std::string::npos);
+  CHECK(fine.err.find("available (--max-memory); use a larger --delta or fewer --points\n") !=
+        std::string::npos);
   // Enough: the same figures as with no limit given.
   const auto ok = with({"--max-memory", "2000"});
   const auto free_run = with({});
@@ -116,11 +117,13 @@ TEST_CASE("dpts-eval keeps to --max-memory or refuses in one line", "[cli][eval]
 TEST_CASE("dpts-eval answers each malformed mesh clearly", "[cli][eval][robust]") {
   Fixture fx;
   // A valid mesh of the DEM to start from: 3 x 3 vertices at cell centres, 8 faces.
-  const std::string head = "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\n"
-                           "property double y\nproperty double z\nelement face 2\n"
-                           "property list uchar int vertex_indices\nend_header\n";
-  const std::string square = "400005 3799995 300\n400235 3799995 300\n400235 3799825 300\n"
-                             "400005 3799825 300\n";
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\n"
+      "property double y\nproperty double z\nelement face 2\n"
+      "property list uchar int vertex_indices\nend_header\n";
+  const std::string square =
+      "400005 3799995 300\n400235 3799995 300\n400235 3799825 300\n"
+      "400005 3799825 300\n";
   struct Case {
     std::string what, text;
     int exit_code;
@@ -133,16 +136,17 @@ TEST_CASE("dpts-eval answers each malformed mesh clearly", "[cli][eval][robust]"
       {"face index out of range", head + square + "3 0 2 1\n3 0 3 7\n", 1,
        "face 1 has vertex index out of range"},
       {"a quad", head + square + "4 0 3 2 1\n3 0 2 1\n", 1, "face 0 is not a triangle"},
-      {"NaN coordinate", head + "nan 3799995 300\n" + square.substr(square.find('\n') + 1) +
-                             "3 0 2 1\n3 0 3 2\n",
-       1, "vertex 0 has a non-finite coordinate"},
+      {"NaN coordinate",
+       head + "nan 3799995 300\n" + square.substr(square.find('\n') + 1) + "3 0 2 1\n3 0 3 2\n", 1,
+       "vertex 0 has a non-finite coordinate"},
       {"face repeating a vertex", head + square + "3 0 2 1\n3 0 0 2\n", 1,
        "face 1 repeats a vertex"},
       {"negative list length", head + square + "3 0 2 1\n-3 0 3 2\n", 1, "bad PLY list length"},
       {"vertices outside the DEM", head + "0 0 300\n1 0 300\n1 1 300\n0 1 300\n3 0 1 2\n3 0 2 3\n",
        1, "vertex 0 (0.000000, 0.000000) lies outside"},
-      {"no faces", "ply\nformat ascii 1.0\nelement vertex 1\nproperty double x\nproperty double y\n"
-                   "property double z\nend_header\n400005 3799995 300\n",
+      {"no faces",
+       "ply\nformat ascii 1.0\nelement vertex 1\nproperty double x\nproperty double y\n"
+       "property double z\nend_header\n400005 3799995 300\n",
        1, "has no faces"},
       // Documented treatment: folded and flat faces are measured and reported, not refused.
       {"a folded face", head + square + "3 0 2 1\n3 0 2 3\n", 0, ""},
@@ -253,18 +257,19 @@ TEST_CASE("dpts-eval refuses --sample-points with --points or --sets, and output
   Fixture fx;
   const auto pts = sample_file(fx.dir, 1, 3);
   for (const char* flag : {"--points", "--sets"}) {
-    const auto r = test::run(kEval, {"--dem", fx.dem, "--mesh", "m.ply", "--sample-points", pts,
-                                     flag, "5"});
+    const auto r =
+        test::run(kEval, {"--dem", fx.dem, "--mesh", "m.ply", "--sample-points", pts, flag, "5"});
     CHECK(r.exit_code == 2);
     CHECK(r.err.rfind("dpts-eval: --sample-points and " + std::string(flag) +
                           " cannot be combined (the file gives the points and sets)\n",
                       0) == 0);
   }
-  const auto exact = test::run(kEval, {"--dem", fx.dem, "--mesh", "m.ply", "--exact", "--delta", "3"});
+  const auto exact =
+      test::run(kEval, {"--dem", fx.dem, "--mesh", "m.ply", "--exact", "--delta", "3"});
   CHECK(exact.exit_code == 2);
   CHECK(exact.err.rfind("dpts-eval: --exact and --delta cannot be combined", 0) == 0);
-  const auto over =
-      test::run(kEval, {"--dem", fx.dem, "--mesh", "m.ply", "--sample-points", pts, "--pairs-out", pts});
+  const auto over = test::run(
+      kEval, {"--dem", fx.dem, "--mesh", "m.ply", "--sample-points", pts, "--pairs-out", pts});
   CHECK(over.exit_code == 2);
   CHECK(over.err.rfind("dpts-eval: --pairs-out " + pts + ": is an input of the run\n", 0) == 0);
 }
@@ -368,8 +373,9 @@ TEST_CASE("dpts-eval answers each bad sample-point file in one line and writes n
        "line 3: expected 3 values set,x,y, found 2"},
       {"a value not a number", "set,x,y\n0,400020,3799980\n0,400030,north\n",
        "line 3: y 'north': expected a finite number"},
-      {"sets not contiguous", "set,x,y\n0,400020,3799980\n0,400030,3799970\n2,400020,3799980\n"
-                              "2,400030,3799970\n",
+      {"sets not contiguous",
+       "set,x,y\n0,400020,3799980\n0,400030,3799970\n2,400020,3799980\n"
+       "2,400030,3799970\n",
        "line 4: set 2, but set 1 has no points (sets are numbered from 0 without gaps)"},
       {"a set of one point", "set,x,y\n0,400020,3799980\n", "line 2: set 0 has only this point"},
   };
@@ -389,8 +395,8 @@ TEST_CASE("dpts-eval answers each bad sample-point file in one line and writes n
   // A point outside the DEM's footprint (west of it by a metre), with the count.
   std::ofstream(pts, std::ios::trunc) << "set,x,y\n0,400020,3799980\n0,400004,3799900\n"
                                          "0,400030,3799970\n";
-  const auto outside = test::run(kEval, {"--dem", fx.dem, "--mesh", mesh, "--sample-points", pts,
-                                         "--pairs-out", pairs});
+  const auto outside = test::run(
+      kEval, {"--dem", fx.dem, "--mesh", mesh, "--sample-points", pts, "--pairs-out", pairs});
   CHECK(outside.exit_code == 1);
   CHECK(outside.err ==
         "dpts-eval: error: 1 of 3 points of sample set 0 lie outside the DEM's footprint\n");
@@ -401,8 +407,8 @@ TEST_CASE("dpts-eval fails in one line when an output cannot be written, leaving
           "[cli][eval][robust]") {
   Fixture fx;
   const auto mesh = simplified_mesh(fx);
-  const std::vector<std::string> base = {"--dem", fx.dem, "--mesh", mesh, "--points", "8",
-                                         "--sets", "1"};
+  const std::vector<std::string> base = {"--dem",    fx.dem, "--mesh", mesh,
+                                         "--points", "8",    "--sets", "1"};
   auto with = [&](std::vector<std::string> extra, const test::RunOptions& ro = {}) {
     extra.insert(extra.begin(), base.begin(), base.end());
     return test::run(kEval, extra, ro);
@@ -412,8 +418,9 @@ TEST_CASE("dpts-eval fails in one line when an output cannot be written, leaving
   const auto missing = (fx.dir / "no" / "pairs.csv").string();
   const auto r1 = with({"--pairs-out", missing});
   CHECK(r1.exit_code == 1);
-  CHECK(r1.err == "dpts-eval: error: " + missing + ": cannot create output (No such file or "
-                                                    "directory)\n");
+  CHECK(r1.err == "dpts-eval: error: " + missing +
+                      ": cannot create output (No such file or "
+                      "directory)\n");
   CHECK(fx.dir.files() == inputs);
   // A full disk, for the pairs and for the report on stdout (text or JSON).
   const auto r2 = with({"--pairs-out", "/dev/full"});
@@ -462,10 +469,13 @@ TEST_CASE("dpts-eval --exact measures with exact geodesics on a small DEM", "[cl
                            "property list uchar int vertex_indices\nend_header\n"
                            "400005 3799995 300\n400235 3799995 300\n400235 3799825 300\n"
                            "400005 3799825 300\n3 0 2 1\n3 0 2 3\n";
-  const auto bad = test::run(kEval, {"--dem", fx.dem, "--mesh", folded, "--exact", "--points", "4"});
+  const auto bad =
+      test::run(kEval, {"--dem", fx.dem, "--mesh", folded, "--exact", "--points", "4"});
   CHECK(bad.exit_code == 1);
-  CHECK(bad.err.rfind("dpts-eval: error: " + folded + ": face 1 cannot join the surface for "
-                      "exact geodesics", 0) == 0);
+  CHECK(bad.err.rfind("dpts-eval: error: " + folded +
+                          ": face 1 cannot join the surface for "
+                          "exact geodesics",
+                      0) == 0);
   CHECK(std::count(bad.err.begin(), bad.err.end(), '\n') == 1);
 }
 
@@ -495,8 +505,9 @@ TEST_CASE("dpts-eval fails with the count of pairs a mesh in two parts does not 
                         "0,400230,3799830\n";
   const auto r = test::run(kEval, {"--dem", fx.dem, "--mesh", slit, "--sample-points", pts});
   CHECK(r.exit_code == 1);
-  CHECK(r.err == "dpts-eval: error: the mesh does not connect 4 of the 6 pairs of sample set 0 "
-                 "that T connects (is it in several parts, or slit?)\n");
+  CHECK(r.err ==
+        "dpts-eval: error: the mesh does not connect 4 of the 6 pairs of sample set 0 "
+        "that T connects (is it in several parts, or slit?)\n");
 }
 
 TEST_CASE("dpts-eval welds a triangle soup and measures it as the indexed mesh",
@@ -517,8 +528,8 @@ TEST_CASE("dpts-eval welds a triangle soup and measures it as the indexed mesh",
     std::ofstream out(soup_path, std::ios::binary);
     io::write_ply(out, soup, io::PlyFormat::ascii);
   }
-  const std::vector<std::string> common = {"--dem", fx.dem, "--points", "12", "--sets", "2",
-                                           "--json"};
+  const std::vector<std::string> common = {"--dem",  fx.dem, "--points", "12",
+                                           "--sets", "2",    "--json"};
   auto run_on = [&](const std::string& m) {
     std::vector<std::string> args = common;
     args.insert(args.end(), {"--mesh", m});

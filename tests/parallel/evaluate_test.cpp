@@ -298,7 +298,8 @@ TEST_CASE("a memory budget bounds the searches at once, with the same figures",
   CHECK(free_run.max_searches == 0);
   REQUIRE(free_run.search_bytes > 0);
   // Graphs and two searches on T: one worker, one finished search waiting for its joins.
-  opt.memory_budget_bytes = free_run.graphs_bytes + 2 * free_run.search_bytes;
+  opt.memory_budget_bytes =
+      free_run.graphs_bytes + 2 * free_run.search_bytes + free_run.pairs_bytes;
   const auto two = par::evaluate_distances(t, s, opt);
   CHECK(two.max_searches == 2);
   CHECK(two.set_errors == free_run.set_errors);
@@ -306,13 +307,14 @@ TEST_CASE("a memory budget bounds the searches at once, with the same figures",
   opt.memory_budget_bytes = free_run.graphs_bytes + 100 * free_run.search_bytes;
   CHECK(par::evaluate_distances(t, s, opt).max_searches == 5);
   // One search short.
-  opt.memory_budget_bytes = free_run.graphs_bytes + 2 * free_run.search_bytes - 1;
+  opt.memory_budget_bytes =
+      free_run.graphs_bytes + 2 * free_run.search_bytes + free_run.pairs_bytes - 1;
   CHECK_THROWS_AS(par::evaluate_distances(t, s, opt), InputError);
   CHECK_THROWS_WITH(
       par::evaluate_distances(t, s, opt),
       Catch::Matches("the geodesics need about .* \\(a Steiner graph of .*, 2 searches of "
-                     ".*\\), more than the .* available \\(--max-memory\\); use a "
-                     "larger --delta"));
+                     ".*, the pairs' arrays .*\\), more than the .* available "
+                     "\\(--max-memory\\); use a larger --delta or fewer --points"));
   // Straightened, a search holds more than twice the memory: one per thread at most.
   opt.straighten = true;
   opt.memory_budget_bytes = 0;
@@ -323,7 +325,8 @@ TEST_CASE("a memory budget bounds the searches at once, with the same figures",
   CHECK(plenty.set_errors == straightened.set_errors);
   CHECK(plenty.original_one_way == 30 * 29 / 2);  // the hole: one way (see below)
   // Room for one search only: measured one way, one search at a time.
-  opt.memory_budget_bytes = straightened.graphs_bytes + 3 * straightened.search_bytes / 2;
+  opt.memory_budget_bytes =
+      straightened.graphs_bytes + 3 * straightened.search_bytes / 2 + straightened.pairs_bytes;
   const auto one = par::evaluate_distances(t, s, opt);
   CHECK(one.max_searches == 1);
   CHECK(one.original_one_way == 30 * 29 / 2);
