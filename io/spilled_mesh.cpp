@@ -5,11 +5,10 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cstdlib>
 #include <cstring>
-#include <filesystem>
 
 #include "core/errors.hpp"
+#include "core/temp_file.hpp"
 #include "io/byte_writer.hpp"
 
 namespace dpts::io {
@@ -18,12 +17,10 @@ namespace {
 // A file made and unlinked at once in dir: its space is given back when it is closed, however
 // the process ends.
 std::FILE* unnamed_file(const std::string& dir) {
-  std::string name = (std::filesystem::path(dir) / "dpts-mesh-XXXXXX").string();
-  const int fd = mkstemp(name.data());
+  const int fd = core::unnamed_temp_file(dir, "dpts-mesh");
   if (fd < 0) {
     throw IoError("temporary file in " + dir + ": cannot create (" + std::strerror(errno) + ")");
   }
-  unlink(name.c_str());
   std::FILE* f = fdopen(fd, "w+b");
   if (f == nullptr) {
     close(fd);
@@ -37,8 +34,7 @@ constexpr std::size_t kRunBytes = std::size_t{1} << 20;
 }  // namespace
 
 SpilledMesh::SpilledMesh() {
-  const char* tmp = std::getenv("TMPDIR");
-  dir_ = tmp != nullptr && *tmp != '\0' ? tmp : "/tmp";
+  dir_ = core::temp_dir();
   xyz_ = unnamed_file(dir_);
   try {
     faces_file_ = unnamed_file(dir_);

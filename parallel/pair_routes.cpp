@@ -6,30 +6,15 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cstdlib>
 #include <cstring>
-#include <filesystem>
 #include <mutex>
 #include <string>
 
 #include "core/errors.hpp"
+#include "core/temp_file.hpp"
 
 namespace dpts::par {
 namespace {
-
-// The folder of temporary files: TMPDIR, else /tmp.
-std::string temp_dir() {
-  const char* tmp = std::getenv("TMPDIR");
-  return tmp != nullptr && *tmp != '\0' ? tmp : "/tmp";
-}
-
-// A file made and unlinked at once in dir (-1: it could not be made).
-int unnamed_file(const std::string& dir) {
-  std::string name = (std::filesystem::path(dir) / "dpts-routes-XXXXXX").string();
-  const int fd = ::mkstemp(name.data());
-  if (fd >= 0) ::unlink(name.c_str());
-  return fd;
-}
 
 // A record: its bends' and taut points' counts (two 32-bit words), then their points.
 constexpr std::size_t kHeader = 2 * sizeof(std::uint32_t);
@@ -49,7 +34,7 @@ struct PairRoutes::Log {
   // every route) where the file cannot be made or written.
   bool spill() {
     if (no_file) return false;
-    if (fd < 0) fd = unnamed_file(dir);
+    if (fd < 0) fd = core::unnamed_temp_file(dir, "dpts-routes");
     std::size_t done = 0;
     while (fd >= 0 && done < buf.size()) {
       const ssize_t n =
@@ -68,7 +53,7 @@ struct PairRoutes::Log {
   }
 
   std::size_t cap;
-  std::string dir = temp_dir();
+  std::string dir = core::temp_dir();
   std::mutex m;
   std::vector<char> buf;   // the log's bytes from offset `base` on
   std::uint64_t base = 0;  // the bytes before are in the file
