@@ -16,20 +16,24 @@ namespace dpts::api {
 
 std::unique_ptr<Evaluation> load(const EvalRequest& request,
                                  const std::function<void(const io::Dem&)>& dem_read) {
-  // Each set's pairs live in K x K tables (distances one way and the other, on T and on T',
-  // the meeting search's, which are wanted: about 64 bytes a pair in all, measured from
-  // parallel/evaluate.cpp's arrays): refused up front where they cannot fit, not killed by
-  // the kernel or failing as a bare out-of-memory later.
+  // Each set's pairs live in K x K tables (par::pair_array_bytes, which the geodesics' memory
+  // plan counts too): refused before the DEM is read where they alone cannot fit, not after
+  // minutes of work, killed by the kernel or failing as a bare out-of-memory.
+  auto check_pairs = [&](const std::string& flag, int points, int sets) {
+    const double need = par::pair_array_bytes(points, sets, request.eval.straighten);
+    const bool limit = request.max_memory_mb > 0;
+    const double have = limit ? static_cast<double>(request.max_memory_mb) * (1 << 20)
+                              : static_cast<double>(par::available_memory_bytes());
+    if (need <= have) return;
+    const std::string n = std::to_string(points);
+    throw InputError(flag + ": the " + n + " x " + n + " pairs of " + std::to_string(sets) +
+                     (sets == 1 ? " set" : " sets") + " need about " + par::format_bytes(need) +
+                     ", more than the " + par::format_bytes(have) + " available" +
+                     (limit ? " (--max-memory)" : ""));
+  };
   if (request.sample_points.empty()) {
-    const double k = request.eval.points;
-    const double need = k * k * 64;
-    const double have = static_cast<double>(par::available_memory_bytes());
-    if (need > have) {
-      const std::string n = std::to_string(request.eval.points);
-      throw InputError("--points " + n + ": the " + n + " x " + n + " pairs of a set need about " +
-                       par::format_bytes(need) + ", more than the " + par::format_bytes(have) +
-                       " available");
-    }
+    check_pairs("--points " + std::to_string(request.eval.points), request.eval.points,
+                request.eval.sets);
   }
   auto e = std::make_unique<Evaluation>();
   e->dem = io::read_dem(request.dem, io::DemReadOptions{request.t_srs}, nullptr);
@@ -79,6 +83,7 @@ std::unique_ptr<Evaluation> load(const EvalRequest& request,
     e->options.sample_xy = io::read_sample_points_file(request.sample_points);
     e->options.sets = static_cast<int>(e->options.sample_xy.size());
     e->options.points = static_cast<int>(e->options.sample_xy[0].size());
+    check_pairs(request.sample_points, e->options.points, e->options.sets);
   }
 
   // Validity of T' over the DEM.

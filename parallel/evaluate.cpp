@@ -57,14 +57,6 @@ constexpr double kEstimateMargin = 1.02;
 // square of the points.
 constexpr std::size_t kRoutesMemory = std::size_t{8} << 20;
 
-// The pairs' arrays of a run of `sets` sets of k points, in bytes: every set's distances on both
-// meshes (and, straightened, the guess and the routes' index on both), and a stage's own (its
-// candidates' lengths and routes, the pairs left one way, the ride-along distances).
-std::size_t pair_array_bytes(std::size_t k, std::size_t sets, bool straightened) {
-  const std::size_t per_set = straightened ? 5 : 2, per_stage = straightened ? 10 : 4;
-  return (per_set * sets + per_stage) * k * k * sizeof(double);
-}
-
 // Squared straight-line (3D) distance between points i and j.
 double straight2(const std::vector<core::SurfacePoint>& points, std::size_t i, std::size_t j) {
   const double dx = points[i].x - points[j].x, dy = points[i].y - points[j].y,
@@ -799,6 +791,11 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
 
 }  // namespace
 
+double pair_array_bytes(double k, double sets, bool straightened) {
+  const double per_set = straightened ? 5 : 2, per_stage = straightened ? 10 : 4;
+  return (per_set * sets + per_stage) * k * k * static_cast<double>(sizeof(double));
+}
+
 std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
                                        const std::vector<core::SurfacePoint>& points,
                                        const PairwiseOptions& options, PairwiseStats* stats) {
@@ -924,7 +921,8 @@ void plan_graphs(const core::TriMesh& original, const core::TriMesh& simplified,
       std::max(est_t.nodes, est_s.nodes), std::max(original.faces.size(), simplified.faces.size()),
       k_max, options.straighten);
   const bool routes = options.straighten;
-  result.pairs_bytes = pair_array_bytes(k_max, sets, routes);
+  result.pairs_bytes = static_cast<std::size_t>(
+      pair_array_bytes(static_cast<double>(k_max), static_cast<double>(sets), routes));
   result.routes_bytes = routes ? kRoutesMemory : 0;
   if (options.memory_budget_bytes > 0) {
     // note: straightened pairs can be measured one way, one search at a time: slower (each

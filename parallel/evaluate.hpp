@@ -85,6 +85,11 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
 std::size_t shorten_along(const core::SteinerGraph& graph,
                           const std::vector<core::SurfacePoint>& points, const PairRoutes& routes,
                           std::vector<double>& distances);
+// The pairs' arrays of a run of `sets` sets of k points, in bytes (in doubles: any k): every
+// set's distances on both meshes (and, straightened, the guess and the routes' index on both),
+// and a stage's own (its candidates' lengths and routes, the pairs left one way, the ride-along
+// distances). evaluate_distances counts them in its memory budget (EvalResult::pairs_bytes).
+double pair_array_bytes(double k, double sets, bool straightened);
 // The fewest queries pairwise_distances needs at once: 2 when meeting in the middle (one
 // searching while a finished one waits for its joins), 1 one way.
 inline std::size_t min_searches(PairwiseMethod method) {

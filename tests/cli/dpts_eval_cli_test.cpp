@@ -335,11 +335,24 @@ TEST_CASE("dpts-eval refuses --points whose pair tables cannot fit, before any w
   // the kernel's OOM killer).
   const auto r = test::run(kEval, {"--dem", fx.dem, "--mesh", "m.ply", "--points", "1000000"});
   CHECK(r.exit_code == 1);
-  CHECK(r.err.rfind("dpts-eval: error: --points 1000000: the 1000000 x 1000000 pairs of a set "
+  CHECK(r.err.rfind("dpts-eval: error: --points 1000000: the 1000000 x 1000000 pairs of 3 sets "
                     "need about ",
                     0) == 0);
   CHECK(r.err.find(" available\n") != std::string::npos);
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  // Within the memory available but not within --max-memory: the same arrays, the same count
+  // the geodesics' plan makes (3000 points: about 1.8 GB for 3 sets), refused before the DEM
+  // is read (the mesh is not even looked at).
+  const auto capped = test::run(
+      kEval, {"--dem", fx.dem, "--mesh", "m.ply", "--points", "3000", "--max-memory", "400"});
+  CHECK(capped.exit_code == 1);
+  CHECK(capped.err.rfind("dpts-eval: error: --points 3000: the 3000 x 3000 pairs of 3 sets need "
+                         "about 1.7 GB, more than the 400 MB available (--max-memory)\n",
+                         0) == 0);
+  const auto one_set = test::run(kEval, {"--dem", fx.dem, "--mesh", "m.ply", "--points", "3000",
+                                         "--sets", "1", "--max-memory", "400"});
+  CHECK(one_set.exit_code == 1);
+  CHECK(one_set.err.find("pairs of 1 set need about ") != std::string::npos);
 }
 
 TEST_CASE("dpts-eval refuses a --pairs-out that is a file of the DEM's dataset",
