@@ -84,6 +84,12 @@ struct QemOptions {
   // order, on the calling thread. The result does not depend on it.
   std::function<void(std::size_t n, const std::function<void(std::size_t, std::size_t)>& fn)>
       for_ranges;
+  // With for_ranges: the interior edges of the least first costs (full_first_costs x the
+  // collapses to make) also get their full cost (the area term's star walks) there, which
+  // the collapse loop takes instead of walking for it where neither end's star has changed
+  // since. 0: none. The same collapses either way; it pays where for_ranges runs on several
+  // threads (the merge's loop is serial).
+  std::size_t full_first_costs = 0;
 };
 
 struct QemResult {
@@ -93,6 +99,7 @@ struct QemResult {
   std::vector<double> plane_xy;       // per output vertex: x, y in options.plane_xy's plane
   std::size_t input_vertices = 0, collapses = 0;
   std::size_t refused = 0;  // collapses refused at the top of the queue (fold, topology, bound)
+  std::size_t full_costs_taken = 0;  // full costs made ahead (QemOptions::full_first_costs) used
 };
 
 // Simplifies a height-field mesh (faces counter-clockwise seen from above; an edge has at most

@@ -211,6 +211,33 @@ TEST_CASE("qem's first costs spread over parts give the same mesh as in order", 
   CHECK(spread.collapses == plain.collapses);
 }
 
+TEST_CASE("qem's full first costs made ahead give the same mesh as walked for in the loop",
+          "[core][qem]") {
+  const core::TriMesh in = test::hills_mesh();
+  core::QemOptions options;
+  options.for_ranges = [](std::size_t n, const std::function<void(std::size_t, std::size_t)>& fn) {
+    for (std::size_t i = (n + 6) / 7; i-- > 0;) fn(7 * i, std::min(n, 7 * i + 7));
+  };
+  // A fifth of the vertices collapsed (as the piece engine's merge), then nine tenths.
+  for (const std::size_t keep : {4 * in.vertex_count() / 5, in.vertex_count() / 10}) {
+    INFO("keep " << keep);
+    const core::QemResult plain = core::qem_simplify(in, keep, options);
+    CHECK(plain.full_costs_taken == 0);
+    for (const std::size_t per_collapse : {1, 2, 100}) {
+      INFO("full first costs " << per_collapse << " a collapse");
+      core::QemOptions ahead = options;
+      ahead.full_first_costs = per_collapse;
+      const core::QemResult r = core::qem_simplify(in, keep, ahead);
+      CHECK(r.full_costs_taken > 0);
+      CHECK(r.mesh.xyz == plain.mesh.xyz);
+      CHECK(r.mesh.faces == plain.mesh.faces);
+      CHECK(r.source == plain.source);
+      CHECK(r.collapses == plain.collapses);
+      CHECK(r.refused == plain.refused);
+    }
+  }
+}
+
 TEST_CASE("qem refuses an edge of three faces and faces oriented unlike", "[core][qem]") {
   core::TriMesh m;
   // Edge 0-1 with three faces (apexes 2, 3 and 4).
