@@ -92,15 +92,8 @@ dpts::SimplifyOptions simplify_options(double keep, std::optional<std::size_t> v
   return o;
 }
 
-}  // namespace
-
-PYBIND11_MODULE(dpts, m) {
-  m.doc() = "dpts: distance-preserving terrain simplification (DEM -> TIN) and its measure";
-  m.attr("__version__") = dpts::version();
-  // note: translators are tried newest first: Cancelled before the Error it derives from.
-  const auto& error = py::register_exception<dpts::Error>(m, "Error", PyExc_RuntimeError);
-  py::register_exception<dpts::Cancelled>(m, "Cancelled", error.ptr());
-
+// dpts.Mesh: the TIN handed back, its arrays as read-only numpy views.
+void declare_mesh(py::module_& m) {
   py::class_<dpts::Mesh>(m, "Mesh", "A TIN: vertices x, y, z in the output CRS, faces CCW.")
       .def_property_readonly(
           "vertices",
@@ -136,7 +129,10 @@ PYBIND11_MODULE(dpts, m) {
         return "<dpts.Mesh " + std::to_string(mesh.vertex_count()) + " vertices, " +
                std::to_string(mesh.faces.size()) + " faces>";
       });
+}
 
+// dpts.simplify: a path or an array of heights to a Mesh.
+void declare_simplify(py::module_& m) {
   m.def(
       "simplify",
       [](py::object source, double keep, std::optional<std::size_t> vertices,
@@ -180,7 +176,10 @@ keep: the fraction of the cells kept (default 0.1), or vertices=N.
 algo: 'qem' (default), 'vp-meta' or 'pld-meta' (out of core); 'vp', 'pld' or 'qslim'
   (the whole DEM in memory).
 progress: called as progress(fraction, stage); return False to stop (dpts.Cancelled).)");
+}
 
+// dpts.evaluate: dpts-eval's measure, as the dict of its --json.
+void declare_evaluate(py::module_& m) {
   m.def(
       "evaluate",
       [](const std::string& dem, const std::string& mesh, int points, int sets, std::uint64_t seed,
@@ -201,4 +200,17 @@ progress: called as progress(fraction, stage); return False to stop (dpts.Cancel
       py::arg("progress") = py::none(),
       "dpts-eval's measure of a mesh file (PLY, OBJ, STL or GeoPackage) against its DEM: a "
       "dict with distance_error and every other figure of dpts-eval --json.");
+}
+
+}  // namespace
+
+PYBIND11_MODULE(dpts, m) {
+  m.doc() = "dpts: distance-preserving terrain simplification (DEM -> TIN) and its measure";
+  m.attr("__version__") = dpts::version();
+  // note: translators are tried newest first: Cancelled before the Error it derives from.
+  const auto& error = py::register_exception<dpts::Error>(m, "Error", PyExc_RuntimeError);
+  py::register_exception<dpts::Cancelled>(m, "Cancelled", error.ptr());
+  declare_mesh(m);
+  declare_simplify(m);
+  declare_evaluate(m);
 }
