@@ -238,13 +238,14 @@ class Collapser {
   static constexpr std::size_t kMaxFullFirstCosts = std::size_t{1} << 18;
   void prepare_full_costs(const std::vector<double>& first, const std::vector<char>& planned,
                           std::size_t m) {
-    // The bound: the m-th least first cost of an interior edge, as every 4th of them sees it
-    // (any bound gives the same collapses).
+    // The edges that may be made: queued, interior (an outline edge is planned in full anyway).
+    auto candidate = [&](std::uint32_t h) { return planned[h] && opp_[h] != kNone; };
+    // The bound: the m-th least first cost of a candidate, as every 4th of them sees it (any
+    // bound gives the same collapses).
     std::vector<float> sample;
-    std::size_t interior = 0;
+    std::size_t candidates = 0;
     for (std::uint32_t h = 0; h < fv_.size(); ++h) {
-      if (!planned[h] || opp_[h] == kNone) continue;
-      if (interior++ % 4 == 0) sample.push_back(static_cast<float>(first[h]));
+      if (candidate(h) && candidates++ % 4 == 0) sample.push_back(static_cast<float>(first[h]));
     }
     m = std::min(m, kMaxFullFirstCosts);
     const std::size_t k = std::min(m / 4, sample.size());
@@ -256,7 +257,7 @@ class Collapser {
     // note: at most m, in edge order, where many tie at the bound (a flat sea's, all 0).
     full_ids_.reserve(m);
     for (std::uint32_t h = 0; h < fv_.size() && full_ids_.size() < m; ++h) {
-      if (planned[h] && opp_[h] != kNone && first[h] <= bound) full_ids_.push_back(h);
+      if (candidate(h) && first[h] <= bound) full_ids_.push_back(h);
     }
     full_costs_.assign(full_ids_.size(), std::numeric_limits<double>::quiet_NaN());
     o_.for_ranges(full_ids_.size(), [&](std::size_t begin, std::size_t end) {
