@@ -17,8 +17,9 @@ namespace dpts::api {
 std::unique_ptr<Evaluation> load(const EvalRequest& request,
                                  const std::function<void(const io::Dem&)>& dem_read) {
   // Each set's pairs live in K x K tables (par::pair_array_bytes, which the geodesics' memory
-  // plan counts too): refused before the DEM is read where they alone cannot fit, not after
-  // minutes of work, killed by the kernel or failing as a bare out-of-memory.
+  // plan counts too): refused where they alone cannot fit (--points before the DEM is read,
+  // --sample-points as soon as the file is), not after minutes of work, killed by the kernel
+  // or failing as a bare out-of-memory.
   auto check_pairs = [&](const std::string& flag, int points, int sets) {
     const double need = par::pair_array_bytes(points, sets, request.eval.straighten);
     const bool limit = request.max_memory_mb > 0;
