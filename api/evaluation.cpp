@@ -122,6 +122,20 @@ std::unique_ptr<Evaluation> load(const EvalRequest& request,
 void measure(Evaluation& e, const EvalRequest& request, const core::Progress& progress) {
   par::EvalOptions& eo = e.options;
   eo.snap_m = e.snap;
+  // Geodesics in metres, as the heights are: x, y of a CRS in feet (a US State Plane zone)
+  // scaled to metres on both meshes and the sample points (in feet, each distance would mix
+  // the units: relief flattened 3.28 x, the error understated several times).
+  if (const double u = e.dem.metres_per_output_unit; u != 1.0) {
+    for (core::TriMesh* m : {&e.t, &e.s}) {
+      for (std::size_t v = 0; v < m->vertex_count(); ++v) {
+        m->xyz[3 * v] *= u;
+        m->xyz[3 * v + 1] *= u;
+      }
+    }
+    for (auto& set : eo.sample_xy) {
+      for (auto& p : set) p[0] *= u, p[1] *= u;
+    }
+  }
   // What the geodesics may use: the limit less what the run holds already, or what is free.
   if (request.max_memory_mb > 0) {
     const std::size_t limit = request.max_memory_mb << 20, held = par::rss_kb() << 10;

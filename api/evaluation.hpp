@@ -25,7 +25,8 @@ struct EvalRequest {
 // A DEM and a mesh on it, with everything dpts-eval reports.
 struct Evaluation {
   io::Dem dem;
-  core::TriMesh t, s;        // the DEM's grid TIN; the mesh (welded)
+  core::TriMesh t, s;        // the DEM's grid TIN; the mesh (welded): x, y in the output
+                             // CRS's unit, in metres once measure() ran (a CRS in feet)
   std::size_t merged = 0;    // mesh vertices welded into an earlier one
   core::MeshCheck validity;  // of the mesh
   double footprint_area = 0;
@@ -35,7 +36,7 @@ struct Evaluation {
   std::size_t measured = 0, uncovered = 0;
   par::EvalOptions options;                      // the request's, with its sample points read
   par::EvalResult result;                        // set by measure()
-  std::unique_ptr<core::PointLocator> locate_s;  // the mesh's faces by position
+  std::unique_ptr<core::PointLocator> locate_s;  // the mesh's faces by position (before measure)
 
   // dpts-eval --json's object.
   std::string json(const EvalRequest& request, int threads, double seconds) const;
@@ -49,7 +50,8 @@ struct Evaluation {
 std::unique_ptr<Evaluation> load(const EvalRequest& request,
                                  const std::function<void(const io::Dem&)>& dem_read = {});
 
-// The surface distances compared (par::evaluate_distances), in the calling arena.
+// The surface distances compared (par::evaluate_distances), in the calling arena, in metres
+// (x, y of both meshes scaled first where the output CRS is in feet).
 void measure(Evaluation& e, const EvalRequest& request, const core::Progress& progress);
 
 }  // namespace dpts::api

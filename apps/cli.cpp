@@ -69,9 +69,10 @@ output; INPUT - is standard input (GDAL's /vsistdin/).
   --verbose            vp-meta/pld-meta/qem: print every piece's value and budget, and times
   --keep P%            keep P percent of the input vertices, 0 < P <= 100 (default 10%)
   --vertices N         keep N vertices instead (N >= 3)
-  --max-error M        qem: keep the vertical error at every valid cell centre <= M (units
-                       of the output CRS); with --keep or --vertices both bounds hold (the
-                       count may then be exceeded), alone as few vertices as M allows
+  --max-error M        qem: keep the vertical error at every valid cell centre <= M metres
+                       (heights are metres in any CRS); with --keep or --vertices both
+                       bounds hold (the count may then be exceeded), alone as few vertices
+                       as M allows
   --vp-volume exact|mc VP volume: exact integral over the hole (default) or the paper's
                        Monte Carlo estimate
   --vp-samples N       Monte Carlo points per VP evaluation (default 100)
@@ -193,8 +194,7 @@ bool read_method_flag(const std::string& arg, ArgReader& in, ParOptions& o, Keep
     const auto res = std::from_chars(v.data(), v.data() + v.size(), m);
     if (v.empty() || res.ec != std::errc() || res.ptr != v.data() + v.size() || !(m > 0) ||
         !std::isfinite(m)) {
-      throw UsageError("--max-error " + v +
-                       ": expected a positive number (units of the output CRS)");
+      throw UsageError("--max-error " + v + ": expected a positive number (metres)");
     }
     o.max_error = m;
     o.max_error_text = v;

@@ -132,6 +132,14 @@ void DemInfo::frame_mesh_to_output(core::TriMesh& mesh) const {
   }
 }
 
+namespace {
+// A longitude the inverse transformation gave (PROJ's are in -180..180) moved by whole turns
+// into the DEM's own range (0..360, or across 180): the turn nearest the DEM's centre.
+double unwrap_lon(double lon, double centre) {
+  return lon + 360.0 * std::round((centre - lon) / 360.0);
+}
+}  // namespace
+
 std::vector<double> DemInfo::grid_xy(const std::vector<double>& output_xy) const {
   const std::size_t n = output_xy.size() / 2;
   std::vector<double> x(n), y(n);
@@ -143,6 +151,9 @@ std::vector<double> DemInfo::grid_xy(const std::vector<double>& output_xy) const
          std::find(ok.begin(), ok.end(), 0) != ok.end())) {
       throw IoError(path + ": cannot transform points from " + output_crs_name +
                     " to the DEM's CRS");
+    }
+    if (source_geographic) {
+      for (double& lon : x) lon = unwrap_lon(lon, centre_lon);
     }
   }
   // Invert the geotransform: (x - gt0, y - gt3) = A (col + 0.5, row + 0.5).
@@ -165,9 +176,12 @@ std::function<bool(double, double, double&, double&)> DemInfo::grid_of_output_fn
   }
   const double* gt = geotransform;
   const std::array<double, 6> g{gt[0], gt[1], gt[2], gt[3], gt[4], gt[5]};
-  return [ct, g](double x, double y, double& col, double& row) {
+  const bool geographic = source_geographic;
+  const double centre = centre_lon;
+  return [ct, g, geographic, centre](double x, double y, double& col, double& row) {
     int ok = 0;
     if (ct && (!ct->Transform(1, &x, &y, nullptr, &ok) || !ok)) return false;
+    if (ct && geographic) x = unwrap_lon(x, centre);
     // Invert the geotransform, as grid_xy.
     const double det = g[1] * g[5] - g[2] * g[4];
     const double dx = x - g[0], dy = y - g[3];
@@ -451,6 +465,8 @@ void set_output_crs(GDALDataset& ds, const std::string& path, const DemReadOptio
     const double unit_m = dst.IsProjected() ? dst.GetLinearUnits() : 1.0;
     dem.metres_per_output_unit = unit_m;
     if (transform) {
+      dem.source_geographic = src.IsGeographic();
+      dem.centre_lon = gt[0] + width / 2.0 * gt[1] + height / 2.0 * gt[2];
       dem.to_output.reset(OGRCreateCoordinateTransformation(&src, &dst));
       dem.from_output.reset(OGRCreateCoordinateTransformation(&dst, &src));
       if (!dem.to_output || !dem.from_output) {

@@ -47,13 +47,17 @@ struct DemInfo {
   // sources; the archive behind /vsizip/ and the like), so that no output is written over one.
   std::vector<std::string> files;
   double metres_per_output_unit = 1.0;
+  // Whether the DEM's CRS is geographic, and its centre's longitude: points mapped back from the
+  // output CRS are brought to the DEM's own range of longitudes (0..360, across 180).
+  bool source_geographic = false;
+  double centre_lon = 0;
   double geotransform[6] = {0, 1, 0, 0, 0, -1};
-  int band = 1;                // the band read (1-based)
-  std::string type_name;       // GDAL's name of the cell type (Int16, Float32...)
+  int band = 1;           // the band read (1-based)
+  std::string type_name;  // GDAL's name of the cell type (Int16, Float32...)
   bool has_nodata = false;
   double nodata = 0;
-  bool float32 = false;      // band type Float32: no-data compares in single precision
-  bool signed_byte = false;  // Byte band marked PIXELTYPE=SIGNEDBYTE (values -128..127)
+  bool float32 = false;          // band type Float32: no-data compares in single precision
+  bool signed_byte = false;      // Byte band marked PIXELTYPE=SIGNEDBYTE (values -128..127)
   double scale = 1, offset = 0;  // height = stored value * scale + offset (band metadata)
   int block_width = 0, block_height = 0;
   std::unique_ptr<OGRCoordinateTransformation, TransformDeleter> to_output;    // null: identity
@@ -134,8 +138,8 @@ struct Dem : DemInfo {
   std::size_t valid_cells = 0;
 
   // The DEM's full-resolution grid TIN (core::grid_tin with the frame's Delaunay diagonal: the
-  // TIN the elimination starts from) in the output CRS, faces counter-clockwise; vertices in surface-cell order. Throws
-  // InputError when the DEM has no face.
+  // TIN the elimination starts from) in the output CRS, faces counter-clockwise; vertices in
+  // surface-cell order. Throws InputError when the DEM has no face.
   core::TriMesh grid_mesh() const;
 };
 

@@ -40,6 +40,69 @@ std::string last_line(const std::string& s) {
 }
 }  // namespace
 
+TEST_CASE("a geographic DEM with longitudes past 180 is simplified and measured as in -180..180",
+          "[cli][eval][crs]") {
+  // The same hills at lon -1.025 and at 358.975 (0..360), and across 180 (179.975 to 180.025,
+  // against 179.925 to 179.975): points mapped back from UTM get PROJ's -180..180 longitudes,
+  // which must be brought to the DEM's own range (they landed 360 degrees off the grid: qem's
+  // grid plane wrong, every face "over no-data").
+  test::TempDir dir;
+  const auto g = test::make_grid(60, 60, [](int c, int r) {
+    return 400.0 + 80.0 * std::sin(c * 0.21) * std::cos(r * 0.17) + 2.0 * c;
+  });
+  const double cell = 0.0008333;
+  auto figures = [&](const std::string& name, double lon0) {
+    const auto dem = (dir / (name + ".tif")).string(), mesh = (dir / (name + ".ply")).string();
+    test::write_geotiff(dem, g, {lon0, cell, 0, 10.0, 0, -cell}, test::epsg_wkt(4326));
+    REQUIRE(test::run(kPar, {"--quiet", dem, mesh}).exit_code == 0);
+    const auto r = test::run(kEval, {"--json", "--quiet", "--dem", dem, "--mesh", mesh, "--points",
+                                     "12", "--sets", "1"});
+    INFO(name << ": " << r.err);
+    REQUIRE(r.exit_code == 0);
+    const std::string js = last_line(r.out);
+    CHECK(io::json_field(js, "faces_over_nodata") == "0");
+    return std::pair{std::stod(io::json_field(js, "vertical_rmse").value_or("nan")),
+                     std::stod(io::json_field(js, "mesh_vertices").value_or("nan"))};
+  };
+  const auto west = figures("west", -1.025), wrapped = figures("wrapped", 358.975);
+  CHECK(wrapped.second == west.second);
+  CHECK(wrapped.first == Approx(west.first).epsilon(0.01));
+  const auto before = figures("before", 179.925), across = figures("across", 179.975);
+  CHECK(across.second == before.second);
+  CHECK(across.first == Approx(before.first).epsilon(0.05));
+}
+
+TEST_CASE("a mesh in a CRS of feet is measured in metres, as in the DEM's own metres",
+          "[cli][eval][crs]") {
+  // Hills near Mount St Helens in UTM 10N (metres), simplified and measured there and in
+  // Washington South State Plane (US survey feet): the output's heights stay metres, so
+  // dpts-eval scales the mesh's x, y to metres (in feet the relief was flattened 3.28 x and
+  // the error came out 5 to 7 x too low).
+  test::TempDir dir;
+  const auto dem = (dir / "dem.tif").string();
+  const auto g = test::make_grid(50, 50, [](int c, int r) {
+    return 1500.0 + 120.0 * std::sin(c * 0.25) * std::cos(r * 0.2) + 4.0 * r;
+  });
+  test::write_geotiff(dem, g, {560000, 20, 0, 5120000, 0, -20}, test::epsg_wkt(32610));
+  auto error = [&](const std::vector<std::string>& crs) {
+    const auto mesh = (dir / (crs.empty() ? "m.ply" : "ft.ply")).string();
+    std::vector<std::string> par{"--quiet", "--keep", "10%"};
+    par.insert(par.end(), crs.begin(), crs.end());
+    par.insert(par.end(), {dem, mesh});
+    REQUIRE(test::run(kPar, par).exit_code == 0);
+    std::vector<std::string> eval{"--json", "--quiet",  "--dem", dem,      "--mesh",
+                                  mesh,     "--points", "12",    "--sets", "1"};
+    eval.insert(eval.end(), crs.begin(), crs.end());
+    const auto r = test::run(kEval, eval);
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    return std::stod(io::json_field(last_line(r.out), "distance_error").value_or("nan"));
+  };
+  const double metres = error({}), feet = error({"--t-srs", "EPSG:2927"});
+  CHECK(metres > 0);
+  CHECK(feet == Approx(metres).epsilon(0.25));
+}
+
 TEST_CASE("dpts-eval reports every figure in one JSON line", "[cli][eval]") {
   Fixture fx;
   const auto mesh = (fx.dir / "m.ply").string();
