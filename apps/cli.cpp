@@ -31,9 +31,16 @@ const std::string* same_file_in(const std::string& path, const std::vector<std::
   return nullptr;
 }
 
+namespace {
+bool g_closed_at_start[3] = {false, false, false};
+}  // namespace
+
+bool std_stream_was_closed(int fd) { return fd >= 0 && fd <= 2 && g_closed_at_start[fd]; }
+
 void reopen_closed_std_streams() {
   for (int fd = 0; fd <= 2; ++fd) {
     if (::fcntl(fd, F_GETFD) != -1 || errno != EBADF) continue;
+    g_closed_at_start[fd] = true;
     const int null = ::open("/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
     if (null >= 0 && null != fd) {
       ::dup2(null, fd);

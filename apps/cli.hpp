@@ -75,6 +75,9 @@ const std::string* same_file_in(const std::string& path, const std::vector<std::
 // Standard streams the caller closed (2>&-) reopened on /dev/null, before any file is opened:
 // otherwise an output file could get descriptor 2 and progress text would land in it.
 void reopen_closed_std_streams();
+// Whether standard stream fd (0-2) was closed when reopen_closed_std_streams ran: OUTPUT - is
+// then refused, not written into /dev/null.
+bool std_stream_was_closed(int fd);
 
 // The memory a run may use, in bytes: --max-memory, or what the system has available now.
 std::size_t memory_limit_bytes(const ParOptions& o);

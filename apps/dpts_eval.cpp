@@ -224,9 +224,16 @@ Options parse(const std::vector<std::string>& args) {
       }
     }
   }
-  if (!o.error_map.empty() && !o.hillshade.empty() &&
-      dpts::cli::same_file(o.error_map, o.hillshade)) {
-    throw UsageError("--error-map and --hillshade-compare: the same file");
+  // Two outputs in one file: the later would replace the earlier.
+  for (std::size_t i = 0; i < std::size(outputs); ++i) {
+    for (std::size_t j = i + 1; j < std::size(outputs); ++j) {
+      if (outputs[i].second->empty() || outputs[j].second->empty() ||
+          !dpts::cli::same_file(*outputs[i].second, *outputs[j].second)) {
+        continue;
+      }
+      throw UsageError(std::string(outputs[i].first) + " and " + outputs[j].first +
+                       ": the same file");
+    }
   }
   return o;
 }

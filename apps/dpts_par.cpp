@@ -41,9 +41,7 @@ namespace {
 // race for the worker threads that poll it; TSan flagged the volatile ints this replaces).
 std::atomic<int> g_cancel{0};
 static_assert(std::atomic<int>::is_always_lock_free);
-extern "C" void on_signal(int) {
-  g_cancel.store(1, std::memory_order_relaxed);
-}
+extern "C" void on_signal(int) { g_cancel.store(1, std::memory_order_relaxed); }
 
 dpts::io::DemReadOptions read_options(const dpts::cli::ParOptions& o) {
   dpts::io::DemReadOptions r;
@@ -72,13 +70,13 @@ dpts::io::DemInfo open_input(const dpts::cli::ParOptions& o) {
   return dem;
 }
 
-// Records the output in the report (after it was committed).
+// Records the output in the report: OUTPUT's bytes as written in file (OUTPUT once committed).
 void record_output(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem,
                    std::size_t valid_cells, std::size_t surface, std::size_t kept,
-                   std::size_t faces) {
+                   std::size_t faces, const std::string& file) {
   if (g_report.path.empty()) return;
   g_report.input_json = dpts::cli::input_json(dem, valid_cells, surface);
-  g_report.output_json = dpts::cli::output_json(o.output, kept, faces);
+  g_report.output_json = dpts::cli::output_json(o.output, kept, faces, file);
 }
 
 void print_notes(const dpts::io::DemInfo& dem, const dpts::cli::ParOptions& o) {
@@ -147,7 +145,6 @@ void write_mesh(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem,
                  o.output.c_str(), moved);
   }
   if (g_cancel.load(std::memory_order_relaxed)) throw Cancelled();
-  out.commit();
 }
 
 // --verbose: the pieces (value: vp-meta/pld-meta's piece values, else "-"), stage times and
@@ -315,13 +312,30 @@ int simplify_and_write(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinte
   const std::size_t faces = result.face_count();
   const auto t_write = std::chrono::steady_clock::now();
   write_mesh(o, result.dem, result, *out);
+  if (!g_report.path.empty() && pieces) g_report.pieces_json = cli::pieces_json(result.pieces);
+  // A report written as a stream to a device or named pipe goes out before OUTPUT is put in
+  // place: one that cannot be written (--report /dev/full) fails the run with OUTPUT
+  // untouched. (A report file is written after, atomically, as a failed run's is; so is one
+  // to standard output or error, after the summary line.)
+  if (!g_report.path.empty() && io::AtomicOutputFile::streams_to(g_report.path) &&
+      !io::AtomicOutputFile::names_descriptor(g_report.path) &&
+      !io::AtomicOutputFile::streams_to(o.output)) {
+    out->stream().flush();
+    record_output(o, result.dem, result.valid_cells, result.input_vertices, result.kept_vertices,
+                  faces, out->temp_path().string());
+    const std::string failed = g_report.write(o, "ok", 0, "");
+    if (!failed.empty()) throw IoError("report not written: " + failed);
+    g_report.written = true;
+  }
+  out->commit();
   if (o.verbose && pieces) {
     std::fprintf(stderr, DPTS_PROG ": stages: write %.2f s\n",
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - t_write).count());
   }
-  record_output(o, result.dem, result.valid_cells, result.input_vertices, result.kept_vertices,
-                faces);
-  if (!g_report.path.empty() && pieces) g_report.pieces_json = cli::pieces_json(result.pieces);
+  if (!g_report.written) {
+    record_output(o, result.dem, result.valid_cells, result.input_vertices, result.kept_vertices,
+                  faces, o.output);
+  }
   summary(o, result.input_vertices, result.kept_vertices, faces, start);
   return 0;
 }
@@ -361,6 +375,9 @@ int run(const dpts::cli::ParOptions& o) {
   }
 #endif
   apply_config(o);
+  if (o.output == "/dev/stdout" && cli::std_stream_was_closed(1)) {
+    throw IoError("OUTPUT -: standard output is closed");
+  }
   if (dpts::cli::same_file(o.input, o.output)) {
     throw UsageError(o.output + ": OUTPUT is the INPUT file; refusing to overwrite it");
   }
@@ -486,7 +503,7 @@ int par_main(int argc, char** argv) {
   const std::vector<std::string> args(argv + 1, argv + argc);
   dpts::cli::ParOptions o;
   auto report = [&](const std::string& status, int code, const std::string& error) {
-    if (o.help || o.version) return code;
+    if (o.help || o.version || g_report.written) return code;
     const std::string failed = g_report.write(o, status, code, error);
     // A run that failed said why already; one that worked fails now.
     if (failed.empty() || code != 0) return code;

@@ -111,15 +111,16 @@ std::string input_json(const io::DemInfo& dem, std::size_t valid_cells,
       .str();
 }
 
-std::string output_json(const std::string& path, std::size_t vertices, std::size_t faces) {
+std::string output_json(const std::string& path, std::size_t vertices, std::size_t faces,
+                        const std::string& file) {
   std::error_code ec;
-  const auto bytes = std::filesystem::file_size(path, ec);
+  const auto bytes = std::filesystem::file_size(file, ec);
   return io::JsonObject()
       .add("path", path)
       .add("vertices", vertices)
       .add("faces", faces)
       .add("bytes", static_cast<unsigned long long>(ec ? 0 : bytes))
-      .add("sha256", io::sha256_file(path))
+      .add("sha256", io::sha256_file(file))
       .str();
 }
 

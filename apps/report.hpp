@@ -48,9 +48,12 @@ std::string output_options_json(const ParOptions& o);
 std::string resume_key(const ParOptions& o);
 
 // The report's parts: the input as read, the output as written (bytes and sha256 read back
-// from the file), the pieces of the meta engine.
-std::string input_json(const io::DemInfo& dem, std::size_t valid_cells, std::size_t surface_vertices);
-std::string output_json(const std::string& path, std::size_t vertices, std::size_t faces);
+// from file: path itself once committed, its temporary file before), the pieces of the meta
+// engine.
+std::string input_json(const io::DemInfo& dem, std::size_t valid_cells,
+                       std::size_t surface_vertices);
+std::string output_json(const std::string& path, std::size_t vertices, std::size_t faces,
+                        const std::string& file);
 std::string pieces_json(const par::MetaStats& stats);
 
 struct RunReport {
@@ -59,6 +62,7 @@ struct RunReport {
   std::string input_json = "{}", output_json = "null", pieces_json;
   int threads = 0;  // the threads the run used
   StageClock clock;
+  bool written = false;  // written already (a streamed report, before OUTPUT's commit)
 
   // Writes the report (atomically). status: "ok", "failed" or "interrupted". Never throws:
   // returns why the report could not be written ("" when it was).

@@ -20,7 +20,7 @@ namespace {
 // Whether a path names one of this process's open descriptors (/dev/stdout, /dev/stderr,
 // /dev/fd/N, /proc/self/fd/N): what it leads to was opened by the caller (a shell's
 // redirection), and is written into, never replaced by a new file.
-bool names_descriptor(const fs::path& path) {
+bool descriptor_name(const fs::path& path) {
   const std::string p = path.lexically_normal().string();
   if (p == "/dev/stdout" || p == "/dev/stderr") return true;
   for (const std::string prefix : {"/dev/fd/", "/proc/self/fd/"}) {
@@ -58,7 +58,11 @@ bool AtomicOutputFile::streams_to(const fs::path& final_path) {
   std::error_code ec;
   const fs::file_status st = fs::status(final_path, ec);
   return !ec && (fs::is_fifo(st) || fs::is_character_file(st) || fs::is_socket(st) ||
-                 (names_descriptor(final_path) && fs::is_regular_file(st)));
+                 (descriptor_name(final_path) && fs::is_regular_file(st)));
+}
+
+bool AtomicOutputFile::names_descriptor(const fs::path& final_path) {
+  return descriptor_name(final_path);
 }
 
 int AtomicOutputFile::remove_leftovers(const fs::path& final_path) {
@@ -99,6 +103,11 @@ AtomicOutputFile::AtomicOutputFile(fs::path final_path) : final_(std::move(final
     throw IoError(final_.string() + ": is a block device; refusing to write to it");
   }
   final_ = follow_links(final_);
+  // An existing file we may not write is not replaced (as cp and a shell's > refuse it),
+  // though its folder would let the rename through.
+  if (fs::is_regular_file(fs::status(final_, ec)) && ::access(final_.c_str(), W_OK) != 0) {
+    throw IoError(final_.string() + ": cannot write output (" + std::strerror(errno) + ")");
+  }
   const auto dir = final_.has_parent_path() ? final_.parent_path() : fs::path(".");
   std::string pattern = (dir / (temp_prefix(final_) + "XXXXXX")).string();
   std::vector<char> name(pattern.begin(), pattern.end());

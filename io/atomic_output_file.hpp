@@ -25,6 +25,9 @@ class AtomicOutputFile {
 
   // Whether final_path (links followed) is written as a stream (see above).
   static bool streams_to(const std::filesystem::path& final_path);
+  // Whether final_path names one of this process's descriptors (/dev/stdout, /dev/stderr,
+  // /dev/fd/N, /proc/self/fd/N).
+  static bool names_descriptor(const std::filesystem::path& final_path);
   ~AtomicOutputFile();  // not committed: removes the temporary file
   AtomicOutputFile(const AtomicOutputFile&) = delete;
   AtomicOutputFile& operator=(const AtomicOutputFile&) = delete;

@@ -22,6 +22,7 @@
 
 #include "core/errors.hpp"
 #include "core/surface_sampling.hpp"
+#include "io/input_file.hpp"
 #include "io/netcdf_classic.hpp"
 
 namespace dpts::io {
@@ -363,8 +364,10 @@ void check_plain_file(const std::string& path) {
                         std::all_of(path.begin(), path.begin() + static_cast<long>(colon),
                                     [](unsigned char c) { return std::isalnum(c) || c == '_'; });
   const bool virtual_file = path.rfind("/vsi", 0) == 0 || prefixed;
-  if (!virtual_file && !std::filesystem::exists(path, ec))
+  if (!virtual_file && !std::filesystem::exists(path, ec)) {
+    throw_if_unreachable(path, ec);
     throw InputError(path + ": no such file");
+  }
   if (!virtual_file && std::filesystem::is_directory(path, ec))
     throw InputError(path + ": is a directory, not a raster");
   const std::filesystem::file_status st = std::filesystem::status(path, ec);
@@ -398,7 +401,8 @@ void read_geotransform(GDALDataset& ds, const std::string& path, int width, int 
     char coefficients[128];
     std::snprintf(coefficients, sizeof coefficients, "%.9g, %.9g, %.9g, %.9g", gt[1], gt[2], gt[4],
                   gt[5]);
-    throw InputError(path + ": geotransform has zero cell size (" + coefficients + ")");
+    throw InputError(path + ": geotransform is singular: its cells have no area (" + coefficients +
+                     ")");
   }
   // Cells so small beside the coordinates' magnitude that doubles hardly tell their corners
   // apart (fewer than ~5000 steps of the last bit per cell; folds were measured from 2e-14)

@@ -2,6 +2,7 @@
 #include "io/ply.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -340,6 +341,11 @@ Mesh read_ply(std::istream& in, const std::string& name) {
         }
       }
     }
+  }
+  // Data past what the header counts: the counts do not match (a header edited, files joined).
+  // Trailing white space (a line end some writers add) is allowed.
+  for (int c; (c = in.get()) != std::char_traits<char>::eof();) {
+    if (!std::isspace(c)) throw InputError(name + ": more data than the PLY header counts");
   }
   return mesh;
 }

@@ -182,6 +182,7 @@ RunResult run(const std::string& exe, const std::vector<std::string>& args,
     ::dup2(out, 1);
     ::dup2(err, 2);
     if (options.close_stderr) ::close(2);
+    if (options.close_stdout) ::close(1);
     if (options.file_size_limit > 0) {
       ::signal(SIGXFSZ, SIG_IGN);  // kept across exec: writes fail with EFBIG instead
       const rlimit limit{options.file_size_limit, options.file_size_limit};

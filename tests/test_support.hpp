@@ -69,6 +69,7 @@ struct RunOptions {
   std::string stdin_from;               // a file stdin reads (empty: /dev/null)
   std::string cwd;                      // the child's working folder (empty: ours)
   bool close_stderr = false;            // start the child with descriptor 2 closed (2>&-)
+  bool close_stdout = false;            // start the child with descriptor 1 closed (>&-)
   std::size_t address_space_limit = 0;  // RLIMIT_AS in bytes (0: none)
   int cpu_limit_s = 0;  // RLIMIT_CPU's soft limit (0: none): SIGXCPU kills past it (no core)
   // A child still running after this many seconds is killed (SIGKILL: exit code 137) and

@@ -138,7 +138,8 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
     return path(name);
   };
   const std::string zero = vrt("zero_cell.vrt", "400000, 0, 0, 3800000, 0, -10");
-  add("zero pixel size", {zero, out}, 1, zero + ": geotransform has zero cell size");
+  add("zero pixel size", {zero, out}, 1,
+      zero + ": geotransform is singular: its cells have no area");
   ::mkfifo((dir / "pipe.tif").c_str(), 0600);
   add("a FIFO with no writer", {path("pipe.tif"), out}, 1,
       path("pipe.tif") + ": is a pipe or a device, not a raster file");
@@ -146,7 +147,7 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
       "/dev/zero: is a pipe or a device, not a raster file");
   const std::string degenerate = vrt("degenerate.vrt", "400000, 10, 20, 3800000, 5, 10");
   add("degenerate geotransform (parallel axes)", {degenerate, out}, 1,
-      degenerate + ": geotransform has zero cell size");
+      degenerate + ": geotransform is singular: its cells have no area");
   const std::string thin = vrt("thin.vrt", "400000, 10, 0, 3800000, 0, -0.00001");
   add("cells 10^6 times wider than high", {thin, out}, 1,
       thin + ": degenerate cell geometry (cells are too thin");

@@ -367,6 +367,12 @@ TEST_CASE("dpts-eval draws the error map and the hillshades, only when the run s
   const auto over = test::run(kEval, {"--dem", fx.dem, "--mesh", mesh, "--error-map", mesh});
   CHECK(over.exit_code == 2);
   CHECK(over.err.rfind("dpts-eval: --error-map " + mesh + ": is an input of the run\n", 0) == 0);
+  // Two outputs in one file: refused (the later would replace the earlier), not written.
+  const auto twice = test::run(kEval, {"--dem", fx.dem, "--mesh", mesh, "--error-map", map,
+                                       "--pairs-out", (fx.dir / "." / "error.png").string()});
+  CHECK(twice.exit_code == 2);
+  CHECK(twice.err.rfind("dpts-eval: --pairs-out and --error-map: the same file\n", 0) == 0);
+  CHECK_FALSE(std::filesystem::exists(map));
   const auto nowhere = test::run(
       kEval, {"--dem", fx.dem, "--mesh", mesh, "--hillshade-compare", "/nonexistent/s.png"});
   CHECK(nowhere.exit_code == 1);

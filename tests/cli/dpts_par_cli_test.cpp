@@ -427,6 +427,33 @@ TEST_CASE("a report that cannot be written fails the run before any work", "[cli
   CHECK(fx.dir.files() == std::vector<std::string>{"dem.tif"});
 }
 
+TEST_CASE("a report that fails as it is streamed fails the run with OUTPUT untouched",
+          "[cli][robust]") {
+  Fixture fx;
+  const auto out = (fx.dir / "out.ply").string();
+  std::ofstream(out) << "mine\n";
+  // A device takes the report as a stream: only writing it can fail (a full disk).
+  const auto r = test::run(kExe, {"--quiet", "--report", "/dev/full", fx.dem, out});
+  CHECK(r.exit_code == 1);
+  CHECK(r.err ==
+        "dpts-par: error: report not written: /dev/full: write failed (No space left on device)\n");
+  CHECK(test::file_bytes(out) == "mine\n");
+  CHECK(fx.dir.files() == std::vector<std::string>{"dem.tif", "out.ply"});
+  // A device that takes it: the run and its report as before.
+  const auto ok = test::run(kExe, {"--quiet", "--report", "/dev/null", fx.dem, out});
+  CHECK(ok.exit_code == 0);
+  CHECK(test::file_bytes(out).rfind("ply\n", 0) == 0);
+}
+
+TEST_CASE("OUTPUT - with standard output closed is refused", "[cli][robust]") {
+  Fixture fx;
+  test::RunOptions closed;
+  closed.close_stdout = true;
+  const auto r = test::run(kExe, {"--quiet", fx.dem, "-"}, closed);
+  CHECK(r.exit_code == 1);
+  CHECK(r.err == "dpts-par: error: OUTPUT -: standard output is closed\n");
+}
+
 TEST_CASE("an output that is a link, a FIFO or a device is written through, never replaced",
           "[cli][robust]") {
   Fixture fx;

@@ -77,6 +77,19 @@ TEST_CASE("malformed PLY is refused with a message naming the file", "[io][ply]"
   CHECK_THROWS_WITH(io::read_ply(quad, "q.ply"), Catch::Contains("not a triangle"));
   std::stringstream text("hello\n");
   CHECK_THROWS_AS(io::read_ply(text, "x.ply"), InputError);
+  // More data than the header counts (a face more, bytes appended); a line end is allowed.
+  std::stringstream extra(
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+      "property double z\nelement face 1\nproperty list uchar int vertex_indices\n"
+      "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n");
+  CHECK_THROWS_WITH(io::read_ply(extra, "e.ply"),
+                    Catch::Contains("e.ply") && Catch::Contains("more data than the PLY header"));
+  std::stringstream binary;
+  io::write_ply(binary, sample_mesh(), io::PlyFormat::binary_little_endian);
+  std::stringstream appended(binary.str() + "junk");
+  CHECK_THROWS_WITH(io::read_ply(appended, "a.ply"), Catch::Contains("more data"));
+  std::stringstream line_end(binary.str() + "\n");
+  CHECK(io::read_ply(line_end, "n.ply").faces.size() == sample_mesh().faces.size());
 }
 
 TEST_CASE("PLY headers are not trusted: lying counts fail on reading, not on allocating",
