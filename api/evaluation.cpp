@@ -37,7 +37,7 @@ std::unique_ptr<Evaluation> load(const EvalRequest& request,
                 request.eval.sets);
   }
   auto e = std::make_unique<Evaluation>();
-  e->dem = io::read_dem(request.dem, io::DemReadOptions{request.t_srs}, nullptr);
+  e->dem = io::read_dem(request.dem, io::DemReadOptions{request.t_srs, request.band}, nullptr);
   const io::Dem& dem = e->dem;
   if (dem_read) dem_read(dem);
   // T: the DEM's full-resolution grid TIN, in the output CRS dpts-par uses.

@@ -16,6 +16,7 @@ namespace dpts::api {
 
 struct EvalRequest {
   std::string dem, mesh, t_srs;
+  int band = 1;               // the DEM's band holding the heights (1-based)
   std::string sample_points;  // a --sample-points file, or empty
   par::EvalOptions eval;
   double snap_m = -1;             // < 0: 0, or half a cell where the DEM is reprojected

@@ -50,6 +50,7 @@ extern "C" void on_signal(int sig) {
 
 struct Options {
   std::string dem, mesh, t_srs;
+  int band = 1;
   std::string sample_points, pairs_out;  // --sample-points FILE.csv, --pairs-out FILE.csv
   std::string error_map, hillshade;      // --error-map, --hillshade-compare FILE.png
   bool edges = false;                    // --edges: the TIN's edges over its hillshade
@@ -77,7 +78,8 @@ The result is the mean over independent sets. Also reports the mesh's validity o
 the DEM (orientation, coverage, faces over no-data) and its vertical error at every valid
 cell centre.
 
-  --dem DEM          the original DEM (any raster GDAL reads; band 1)
+  --dem DEM          the original DEM (any raster GDAL reads)
+  --band B           the DEM's band holding the heights (default 1), as given to dpts-par
   --mesh MESH        the TIN, in the same CRS as dpts-par writes for DEM (see --t-srs): a
                      PLY with vertex x, y, z and triangle faces, an OBJ of triangles, an STL
                      (binary or ASCII), or a GeoPackage of one layer of triangles (Polygon Z,
@@ -169,6 +171,8 @@ Options parse(const std::vector<std::string>& args) {
       o.snap_m = dpts::cli::parse_number<double>(a, value(), 0.0, "a length in metres >= 0");
     } else if (a == "--t-srs") {
       o.t_srs = value();
+    } else if (a == "--band") {
+      o.band = dpts::cli::parse_number<int>(a, value(), 1, "an integer >= 1");
     } else if (a == "--threads") {
       o.threads = dpts::cli::parse_number<int>(a, value(), 1, "an integer >= 1");
     } else if (a == "--max-memory") {
@@ -476,12 +480,18 @@ int run(const Options& o) {
   request.dem = o.dem;
   request.mesh = o.mesh;
   request.t_srs = o.t_srs;
+  request.band = o.band;
   request.sample_points = o.sample_points;
   request.eval = o.eval;
   request.snap_m = o.snap_m;
   request.max_memory_mb = o.max_memory_mb;
   std::optional<io::AtomicOutputFile> error_map_out, hillshade_out;
   const std::unique_ptr<api::Evaluation> ev = api::load(request, [&](const io::Dem& dem) {
+    // Which band of several is measured, as dpts-par says which it simplified.
+    if (dem.band_count > 1 && !o.quiet) {
+      std::cerr << "dpts-eval: " << o.dem << ": " << dem.band_count << " bands; using band "
+                << dem.band << (dem.band == 1 ? " (--band picks another)" : "") << "\n";
+    }
     // Nor may an output overwrite any file of the DEM's dataset (an ENVI .hdr, a VRT's
     // source, the zip behind /vsizip/).
     for (const auto& [flag, path] :

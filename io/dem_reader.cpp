@@ -593,6 +593,7 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
   read_geotransform(*ds, path, width, height, dem);
   set_output_crs(*ds, path, options, width, height, dem);
   dem.band = options.band;
+  dem.band_count = ds->GetRasterCount();
   read_band_info(ds->GetRasterBand(options.band), path, dem);
   dem.width = width;
   dem.height = height;

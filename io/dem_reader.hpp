@@ -53,6 +53,7 @@ struct DemInfo {
   double centre_lon = 0;
   double geotransform[6] = {0, 1, 0, 0, 0, -1};
   int band = 1;           // the band read (1-based)
+  int band_count = 1;     // the raster's bands
   std::string type_name;  // GDAL's name of the cell type (Int16, Float32...)
   bool has_nodata = false;
   double nodata = 0;

@@ -1,4 +1,5 @@
 // dpts-eval as users run it: figures, JSON, exit codes.
+#include <gdal_priv.h>
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -7,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -101,6 +103,50 @@ TEST_CASE("a mesh in a CRS of feet is measured in metres, as in the DEM's own me
   const double metres = error({}), feet = error({"--t-srs", "EPSG:2927"});
   CHECK(metres > 0);
   CHECK(feet == Approx(metres).epsilon(0.25));
+}
+
+TEST_CASE("dpts-eval measures the band dpts-par simplified (--band), and names the one it reads",
+          "[cli][eval]") {
+  // Band 2 lies 500 m above band 1: measured against band 1 the mesh of band 2 is 500 m off.
+  test::TempDir dir;
+  const auto dem = (dir / "two.tif").string(), mesh = (dir / "m.ply").string();
+  const auto band1 = test::make_grid(
+      30, 20, [](int c, int r) { return 300.0 + 25.0 * std::sin(c * 0.5) * std::cos(r * 0.4); });
+  const auto band2 = test::make_grid(
+      30, 20, [](int c, int r) { return 800.0 + 25.0 * std::sin(c * 0.5) * std::cos(r * 0.4); });
+  test::RasterSpec two;
+  two.bands = 2;
+  two.geotransform = {400000, 10, 0, 3800000, 0, -10};
+  two.wkt = test::epsg_wkt(32611);
+  test::write_raster(dem, band1, two);
+  {
+    GDALAllRegister();
+    std::unique_ptr<GDALDataset> ds(
+        GDALDataset::Open(dem.c_str(), GDAL_OF_UPDATE | GDAL_OF_RASTER));
+    REQUIRE(ds);
+    std::vector<float> z(band2.z.begin(), band2.z.end());
+    REQUIRE(ds->GetRasterBand(2)->RasterIO(GF_Write, 0, 0, 30, 20, z.data(), 30, 20, GDT_Float32, 0,
+                                           0) == CE_None);
+  }
+  REQUIRE(test::run(kPar, {"--quiet", "--band", "2", dem, mesh}).exit_code == 0);
+  auto rmse = [&](const std::vector<std::string>& band, std::string* err = nullptr) {
+    std::vector<std::string> args{"--json",   "--dem", dem,      "--mesh", mesh,
+                                  "--points", "6",     "--sets", "1"};
+    args.insert(args.end(), band.begin(), band.end());
+    const auto r = test::run(kEval, args);
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    if (err) *err = r.err;
+    return std::stod(io::json_field(last_line(r.out), "vertical_rmse").value_or("nan"));
+  };
+  std::string err;
+  CHECK(rmse({"--band", "2"}) < 5.0);
+  CHECK(rmse({}, &err) == Approx(500.0).epsilon(0.02));
+  CHECK(err.rfind("dpts-eval: " + dem + ": 2 bands; using band 1 (--band picks another)\n", 0) ==
+        0);
+  const auto none = test::run(kEval, {"--dem", dem, "--mesh", mesh, "--band", "3"});
+  CHECK(none.exit_code == 1);
+  CHECK(none.err == "dpts-eval: error: " + dem + ": has 2 bands; there is no band 3\n");
 }
 
 TEST_CASE("dpts-eval reports every figure in one JSON line", "[cli][eval]") {
