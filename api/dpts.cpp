@@ -205,11 +205,13 @@ Evaluation evaluate(const std::string& dem, const std::string& mesh, const Evalu
                     const ProgressFn& progress) {
   if (options.points < 2) throw UsageError("points: expected >= 2");
   if (options.sets < 1) throw UsageError("sets: expected >= 1");
+  if (options.band < 1) throw UsageError("band: expected >= 1");
   return in_arena(options.threads, [&] {
     api::EvalRequest request;
     request.dem = dem;
     request.mesh = mesh;
     request.t_srs = options.t_srs;
+    request.band = options.band;
     request.eval.points = options.points;
     request.eval.sets = options.sets;
     request.eval.seed = options.seed;

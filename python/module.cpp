@@ -183,20 +183,21 @@ void declare_evaluate(py::module_& m) {
   m.def(
       "evaluate",
       [](const std::string& dem, const std::string& mesh, int points, int sets, std::uint64_t seed,
-         int threads, const std::string& t_srs, py::object progress) {
+         int threads, const std::string& t_srs, int band, py::object progress) {
         dpts::EvaluateOptions o;
         o.points = points;
         o.sets = sets;
         o.seed = seed;
         o.threads = threads;
         o.t_srs = t_srs;
+        o.band = band;
         PyProgress p(std::move(progress));
         const dpts::Evaluation e =
             without_gil(p, [&] { return dpts::evaluate(dem, mesh, o, p.fn()); });
         return py::module_::import("json").attr("loads")(e.json);
       },
       py::arg("dem"), py::arg("mesh"), py::kw_only(), py::arg("points") = 100, py::arg("sets") = 3,
-      py::arg("seed") = 1, py::arg("threads") = 0, py::arg("t_srs") = "",
+      py::arg("seed") = 1, py::arg("threads") = 0, py::arg("t_srs") = "", py::arg("band") = 1,
       py::arg("progress") = py::none(),
       "dpts-eval's measure of a mesh file (PLY, OBJ, STL or GeoPackage) against its DEM: a "
       "dict with distance_error and every other figure of dpts-eval --json.");

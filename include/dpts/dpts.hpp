@@ -73,6 +73,7 @@ struct EvaluateOptions {
   std::uint64_t seed = 1;
   int threads = 0;    // 0: all cores
   std::string t_srs;  // the mesh's CRS when the DEM was simplified with t_srs
+  int band = 1;       // the band holding the heights (as simplified)
 };
 
 // dpts-eval's figures for a mesh file made from a DEM: PLY, OBJ, STL (binary or ASCII) or

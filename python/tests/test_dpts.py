@@ -95,6 +95,9 @@ def test_evaluate_returns_dpts_eval_figures(tmp_path):
         other = dpts.evaluate(SAMPLE, str(tmp_path / name), points=12, sets=2)
         assert other["distance_error"] == pytest.approx(r["distance_error"], rel=1e-9), name
         assert other["mesh_vertices"] == 1232 and other["mesh_faces"] == r["mesh_faces"], name
+    # The band measured is the one simplified: the sample has one.
+    with pytest.raises(dpts.Error, match="no band 2"):
+        dpts.evaluate(SAMPLE, str(out), points=12, sets=2, band=2)
 
 
 def test_errors_name_the_file_or_option(tmp_path):
