@@ -488,10 +488,7 @@ int run(const Options& o) {
   std::optional<io::AtomicOutputFile> error_map_out, hillshade_out;
   const std::unique_ptr<api::Evaluation> ev = api::load(request, [&](const io::Dem& dem) {
     // Which band of several is measured, as dpts-par says which it simplified.
-    if (dem.band_count > 1 && !o.quiet) {
-      std::cerr << "dpts-eval: " << o.dem << ": " << dem.band_count << " bands; using band "
-                << dem.band << (dem.band == 1 ? " (--band picks another)" : "") << "\n";
-    }
+    if (!dem.bands_note.empty() && !o.quiet) std::cerr << "dpts-eval: " << dem.bands_note << "\n";
     // Nor may an output overwrite any file of the DEM's dataset (an ENVI .hdr, a VRT's
     // source, the zip behind /vsizip/).
     for (const auto& [flag, path] :

@@ -15,12 +15,9 @@ namespace dpts::io {
 
 namespace fs = std::filesystem;
 
-namespace {
-
-// Whether a path names one of this process's open descriptors (/dev/stdout, /dev/stderr,
-// /dev/fd/N, /proc/self/fd/N): what it leads to was opened by the caller (a shell's
-// redirection), and is written into, never replaced by a new file.
-bool descriptor_name(const fs::path& path) {
+// What a path that names one of this process's open descriptors leads to was opened by the
+// caller (a shell's redirection), and is written into, never replaced by a new file.
+bool AtomicOutputFile::names_descriptor(const fs::path& path) {
   const std::string p = path.lexically_normal().string();
   if (p == "/dev/stdout" || p == "/dev/stderr") return true;
   for (const std::string prefix : {"/dev/fd/", "/proc/self/fd/"}) {
@@ -31,6 +28,8 @@ bool descriptor_name(const fs::path& path) {
   }
   return false;
 }
+
+namespace {
 
 // The path a link (even a dangling one, or a chain of them) leads to; a path that is no link
 // is its own. The output goes there, the link stays.
@@ -58,11 +57,7 @@ bool AtomicOutputFile::streams_to(const fs::path& final_path) {
   std::error_code ec;
   const fs::file_status st = fs::status(final_path, ec);
   return !ec && (fs::is_fifo(st) || fs::is_character_file(st) || fs::is_socket(st) ||
-                 (descriptor_name(final_path) && fs::is_regular_file(st)));
-}
-
-bool AtomicOutputFile::names_descriptor(const fs::path& final_path) {
-  return descriptor_name(final_path);
+                 (names_descriptor(final_path) && fs::is_regular_file(st)));
 }
 
 int AtomicOutputFile::remove_leftovers(const fs::path& final_path) {

@@ -586,14 +586,14 @@ DemInfo open_dem(const std::string& path, const DemReadOptions& options) {
                      " cells; at least 2 x 2 are needed");
   }
   if (ds->GetRasterCount() > 1) {
-    dem.notes.push_back(path + ": " + std::to_string(ds->GetRasterCount()) + " bands; using band " +
-                        std::to_string(options.band) +
-                        (options.band == 1 ? " (--band picks another)" : ""));
+    dem.bands_note = path + ": " + std::to_string(ds->GetRasterCount()) + " bands; using band " +
+                     std::to_string(options.band) +
+                     (options.band == 1 ? " (--band picks another)" : "");
+    dem.notes.push_back(dem.bands_note);
   }
   read_geotransform(*ds, path, width, height, dem);
   set_output_crs(*ds, path, options, width, height, dem);
   dem.band = options.band;
-  dem.band_count = ds->GetRasterCount();
   read_band_info(ds->GetRasterBand(options.band), path, dem);
   dem.width = width;
   dem.height = height;

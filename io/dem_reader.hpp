@@ -52,9 +52,9 @@ struct DemInfo {
   bool source_geographic = false;
   double centre_lon = 0;
   double geotransform[6] = {0, 1, 0, 0, 0, -1};
-  int band = 1;           // the band read (1-based)
-  int band_count = 1;     // the raster's bands
-  std::string type_name;  // GDAL's name of the cell type (Int16, Float32...)
+  int band = 1;            // the band read (1-based)
+  std::string bands_note;  // of a raster of several bands, which is read (also in notes)
+  std::string type_name;   // GDAL's name of the cell type (Int16, Float32...)
   bool has_nodata = false;
   double nodata = 0;
   bool float32 = false;          // band type Float32: no-data compares in single precision
