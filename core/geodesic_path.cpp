@@ -573,7 +573,11 @@ void PathStraightener::taut_route(PathRoute& route) const {
 
 double PathStraightener::follow(const SurfacePoint& source,
                                 const std::vector<std::array<double, 2>>& route,
-                                const SurfacePoint& target) {
+                                const SurfacePoint& target, PathRoute* taut) {
+  if (taut) {
+    taut->bends.clear();
+    taut->taut.clear();
+  }
   ++stats_.paths;
   const TriMesh& m = g_.mesh();
   // The strip is the faces the route crosses, walked straight (seen from above) from point to
@@ -658,7 +662,9 @@ double PathStraightener::follow(const SurfacePoint& source,
     }
   }
   if (strip_.front() != source.face || strip_.back() != target.face) return failed();
-  return pull_taut(source, target);
+  const double len = pull_taut(source, target);
+  if (taut && len >= 0) taut_route(*taut);
+  return len;
 }
 
 double PathStraightener::along(const SurfacePoint& source,

@@ -65,8 +65,9 @@ class PathStraightener {
   // every vertex near it the strip keeps. (A route told by its bends alone is straight between
   // them from above, which a path on steep ground is not: along() it may pass a vertex on the
   // other side, and find a shorter path nearby where the meshes differ.)
+  // With taut, the straightened path's route into it (as shortest()).
   double follow(const SurfacePoint& source, const std::vector<std::array<double, 2>>& route,
-                const SurfacePoint& target);
+                const SurfacePoint& target, PathRoute* taut = nullptr);
 
   // What the calls so far did: paths straightened, strips pulled taut (one per pass), vertices
   // rerouted around, and paths that could not be straightened.

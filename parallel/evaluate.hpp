@@ -81,14 +81,17 @@ std::vector<double> pairwise_distances(const core::SteinerGraph& graph,
 // PathStraightener::along its bends and PathStraightener::follow its taut points, the shorter)
 // where that is shorter, beyond rounding; returns how many were. Where the search on one mesh
 // took the longer of two near-equal routes, the other's mostly did not.
-// In parallel; the same figures for any thread count.
+// In parallel; the same figures for any thread count. With shortened_routes (reset by the
+// caller for these points), each pair shortened is given the route of its new path there, for
+// the other mesh to try in turn.
 std::size_t shorten_along(const core::SteinerGraph& graph,
                           const std::vector<core::SurfacePoint>& points, const PairRoutes& routes,
-                          std::vector<double>& distances);
+                          std::vector<double>& distances, PairRoutes* shortened_routes = nullptr);
 // The pairs' arrays of a run of `sets` sets of k points, in bytes (in doubles: any k): every
-// set's distances on both meshes (and, straightened, the guess and the routes' index on both),
-// and a stage's own (its candidates' lengths and routes, the pairs left one way, the ride-along
-// distances). evaluate_distances counts them in its memory budget (EvalResult::pairs_bytes).
+// set's distances on both meshes (and, straightened, the guess and the indexes of the routes
+// held at once: on both meshes, and the pairs shortened on one), and a stage's own (its
+// candidates' lengths and routes, the pairs left one way, the ride-along distances).
+// evaluate_distances counts them in its memory budget (EvalResult::pairs_bytes).
 double pair_array_bytes(double k, double sets, bool straightened);
 // The fewest queries pairwise_distances needs at once: 2 when meeting in the middle (one
 // searching while a finished one waits for its joins), 1 one way.

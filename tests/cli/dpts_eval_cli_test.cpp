@@ -456,13 +456,13 @@ TEST_CASE("dpts-eval refuses --points whose pair tables cannot fit, before any w
   CHECK(r.err.find(" available\n") != std::string::npos);
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
   // Within the memory available but not within --max-memory: the same arrays, the same count
-  // the geodesics' plan makes (3000 points: about 1.8 GB for 3 sets), refused before the DEM
+  // the geodesics' plan makes (3000 points: about 2.0 GB for 3 sets), refused before the DEM
   // is read (the mesh is not even looked at).
   const auto capped = test::run(
       kEval, {"--dem", fx.dem, "--mesh", "m.ply", "--points", "3000", "--max-memory", "400"});
   CHECK(capped.exit_code == 1);
   CHECK(capped.err.rfind("dpts-eval: error: --points 3000: the 3000 x 3000 pairs of 3 sets need "
-                         "about 1.7 GB, more than the 400 MB available (--max-memory)\n",
+                         "about 1.9 GB, more than the 400 MB available (--max-memory)\n",
                          0) == 0);
   const auto one_set = test::run(kEval, {"--dem", fx.dem, "--mesh", "m.ply", "--points", "3000",
                                          "--sets", "1", "--max-memory", "400"});
