@@ -679,7 +679,9 @@ core::HeightGrid WindowReader::read(int col0, int row0, int width, int height,
     if (info_.signed_byte && z > 127) z -= 256;
     const bool is_nodata =
         info_.has_nodata && (f32 ? static_cast<float>(z) == static_cast<float>(nd) : z == nd);
-    if (is_nodata || !std::isfinite(z)) {
+    // note: NaN is a no-data of its own (float DEMs' usual one); an infinite height is not,
+    // and is counted with the absurd ones below.
+    if (is_nodata || std::isnan(z)) {
       z = nan;
       continue;
     }

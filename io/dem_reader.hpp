@@ -26,8 +26,8 @@ struct DemReadOptions {
 };
 
 // Heights beyond +-1e7 (10,000 km in metres; still beyond Everest in millimetres) are not
-// terrain in any unit a DEM uses: undeclared no-data such as -3.4e38 or 1e30. WindowReader
-// reads them as no-data and counts them.
+// terrain in any unit a DEM uses: undeclared no-data such as -3.4e38 or 1e30, or infinite.
+// WindowReader reads them as no-data and counts them (NaN cells too, not counted).
 inline constexpr double kMaxAbsHeight = 1e7;
 
 struct TransformDeleter {
