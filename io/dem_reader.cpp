@@ -139,6 +139,19 @@ namespace {
 double unwrap_lon(double lon, double centre) {
   return lon + 360.0 * std::round((centre - lon) / 360.0);
 }
+
+// The grid position (col, row; cell centres at integers) of point (x, y) in the DEM's CRS,
+// given by the inverse transformation from the output CRS (transformed): the geotransform gt
+// inverted, (x - gt0, y - gt3) = A (col + 0.5, row + 0.5), a longitude first brought to the
+// DEM's own turn (geographic, centred on centre_lon).
+void source_to_grid(const double* gt, bool transformed, bool geographic, double centre_lon,
+                    double x, double y, double& col, double& row) {
+  if (transformed && geographic) x = unwrap_lon(x, centre_lon);
+  const double det = gt[1] * gt[5] - gt[2] * gt[4];
+  const double dx = x - gt[0], dy = y - gt[3];
+  col = (gt[5] * dx - gt[2] * dy) / det - 0.5;
+  row = (-gt[4] * dx + gt[1] * dy) / det - 0.5;
+}
 }  // namespace
 
 std::vector<double> DemInfo::grid_xy(const std::vector<double>& output_xy) const {
@@ -153,18 +166,11 @@ std::vector<double> DemInfo::grid_xy(const std::vector<double>& output_xy) const
       throw IoError(path + ": cannot transform points from " + output_crs_name +
                     " to the DEM's CRS");
     }
-    if (source_geographic) {
-      for (double& lon : x) lon = unwrap_lon(lon, centre_lon);
-    }
   }
-  // Invert the geotransform: (x - gt0, y - gt3) = A (col + 0.5, row + 0.5).
-  const double* gt = geotransform;
-  const double det = gt[1] * gt[5] - gt[2] * gt[4];
   std::vector<double> grid(2 * n);
   for (std::size_t i = 0; i < n; ++i) {
-    const double dx = x[i] - gt[0], dy = y[i] - gt[3];
-    grid[2 * i] = (gt[5] * dx - gt[2] * dy) / det - 0.5;
-    grid[2 * i + 1] = (-gt[4] * dx + gt[1] * dy) / det - 0.5;
+    source_to_grid(geotransform, from_output != nullptr, source_geographic, centre_lon, x[i], y[i],
+                   grid[2 * i], grid[2 * i + 1]);
   }
   return grid;
 }
@@ -182,12 +188,7 @@ std::function<bool(double, double, double&, double&)> DemInfo::grid_of_output_fn
   return [ct, g, geographic, centre](double x, double y, double& col, double& row) {
     int ok = 0;
     if (ct && (!ct->Transform(1, &x, &y, nullptr, &ok) || !ok)) return false;
-    if (ct && geographic) x = unwrap_lon(x, centre);
-    // Invert the geotransform, as grid_xy.
-    const double det = g[1] * g[5] - g[2] * g[4];
-    const double dx = x - g[0], dy = y - g[3];
-    col = (g[5] * dx - g[2] * dy) / det - 0.5;
-    row = (-g[4] * dx + g[1] * dy) / det - 0.5;
+    source_to_grid(g.data(), ct != nullptr, geographic, centre, x, y, col, row);
     return true;
   };
 }
