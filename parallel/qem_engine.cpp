@@ -217,6 +217,22 @@ class BlockCache {
   std::uint64_t last_key_ = 0;
 };
 
+// A collapse's output r as a piece's mesh in out: each vertex's DEM cell (cell_of, of its input
+// vertex) and seam mark (seam, by input vertex).
+template <typename CellOf>
+void take_collapsed(core::QemResult&& r, const std::vector<char>& seam, CellOf&& cell_of,
+                    QemPieceMesh& out) {
+  out.mesh = std::move(r.mesh);
+  out.quadrics = std::move(r.quadrics);
+  out.plane_xy = std::move(r.plane_xy);
+  out.cell.resize(r.source.size());
+  out.seam.resize(r.source.size());
+  for (std::size_t v = 0; v < r.source.size(); ++v) {
+    out.cell[v] = cell_of(r.source[v]);
+    out.seam[v] = seam[r.source[v]];
+  }
+}
+
 QemPieceMesh simplify_piece(const core::RasterSource& dem, const Positions& positions,
                             const core::Piece& p, double fraction, const QemEngineOptions& options,
                             PieceReport& report, const core::Progress& progress) {
@@ -289,21 +305,18 @@ QemPieceMesh simplify_piece(const core::RasterSource& dem, const Positions& posi
   const std::vector<char> seam = qo.locked;
   core::QemResult r = core::qem_simplify(std::move(mesh), keep, std::move(qo), progress);
   grid = {};
-  out.mesh = std::move(r.mesh);
-  out.quadrics = std::move(r.quadrics);
-  out.plane_xy = std::move(r.plane_xy);
-  out.cell.resize(r.source.size());
-  out.seam.resize(r.source.size());
-  for (std::size_t v = 0; v < r.source.size(); ++v) {
-    // note: 64-bit: a raster may have more than 2^32 cells (a window has fewer).
-    const std::uint32_t local = tin.cells[r.source[v]];
-    const std::uint64_t c =
-        static_cast<std::uint64_t>(wc0) + local % static_cast<std::uint32_t>(ww);
-    const std::uint64_t row =
-        static_cast<std::uint64_t>(wr0) + local / static_cast<std::uint32_t>(ww);
-    out.cell[v] = row * static_cast<std::uint64_t>(dem.width()) + c;
-    out.seam[v] = seam[r.source[v]];
-  }
+  take_collapsed(
+      std::move(r), seam,
+      [&](std::uint32_t input) {
+        // note: 64-bit: a raster may have more than 2^32 cells (a window has fewer).
+        const std::uint32_t local = tin.cells[input];
+        const std::uint64_t c =
+            static_cast<std::uint64_t>(wc0) + local % static_cast<std::uint32_t>(ww);
+        const std::uint64_t row =
+            static_cast<std::uint64_t>(wr0) + local / static_cast<std::uint32_t>(ww);
+        return row * static_cast<std::uint64_t>(dem.width()) + c;
+      },
+      out);
   out.mesh.xyz.shrink_to_fit();
   out.mesh.faces.shrink_to_fit();
   out.quadrics.shrink_to_fit();
@@ -668,16 +681,9 @@ class QemSweep {
       Run& u = run[r];
       core::QemResult res = u.collapse->result();
       u.collapse.reset();
-      QemPieceMesh& out = outputs[r * kRunPieces];
-      out.mesh = std::move(res.mesh);
-      out.quadrics = std::move(res.quadrics);
-      out.plane_xy = std::move(res.plane_xy);
-      out.cell.resize(res.source.size());
-      out.seam.resize(res.source.size());
-      for (std::size_t v = 0; v < res.source.size(); ++v) {
-        out.cell[v] = u.mesh.cell[res.source[v]];
-        out.seam[v] = u.mesh.seam[res.source[v]];
-      }
+      take_collapsed(
+          std::move(res), u.mesh.seam, [&](std::uint32_t input) { return u.mesh.cell[input]; },
+          outputs[r * kRunPieces]);
       u = {};
     });
   }
