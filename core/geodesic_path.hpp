@@ -123,8 +123,14 @@ class PathStraightener {
                 double& ta, double& tb) const;
   // The last taut path's route (from source to target), into route.
   void taut_route(PathRoute& route) const;
+  // The strip of faces of the path from source through nodes[begin..] to target; false where
+  // it cannot be made, with pinch the index of the node where the path passes between two fans
+  // of a vertex (the strip then ends at it) and next_face the face it goes on in (pinch
+  // kNoPinch: failed otherwise).
   bool build_strip(const SurfacePoint& source, const std::vector<std::uint32_t>& nodes,
-                   const SurfacePoint& target);
+                   std::size_t begin, const SurfacePoint& target, std::size_t& pinch,
+                   std::uint32_t& next_face);
+  static constexpr std::size_t kNoPinch = ~std::size_t{0};
   // The strip pulled taut from source to target and rerouted round vertices until locally
   // shortest (length() once the strip is built); negative where it cannot be unfolded.
   double pull_taut(const SurfacePoint& source, const SurfacePoint& target);
@@ -155,6 +161,10 @@ class PathStraightener {
   std::vector<std::uint32_t> path_, around_, tried_, on_paths_;
   Stats stats_;
   std::array<double, 2> source_xy_{}, target_xy_{};  // the last taut path's ends
+  // The last path of length() cut at vertices between fans (split_): its parts' routes and
+  // the vertices between them, which taut_route gives.
+  bool split_ = false;
+  PathRoute split_route_;
 };
 
 }  // namespace dpts::core

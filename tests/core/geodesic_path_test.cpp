@@ -101,6 +101,49 @@ TEST_CASE("straightened paths on a tilted plane are straight lines", "[core][geo
   CHECK(s.stats().failed == 0);
 }
 
+TEST_CASE("a path through a vertex where two parts of the mesh meet is straightened in parts",
+          "[core][geodesic][exact]") {
+  // Two grids of 5 x 5 cells of 10 m on the plane z = 0.3 x - 0.2 y, meeting at one vertex
+  // (the first's north-east corner, the second's south-west), as where a DEM's void touches
+  // itself corner to corner: a path from one to the other passes there from one fan to the
+  // other, which no strip of faces holds. Its geodesic is the two segments through it.
+  const auto plane = [](double x, double y) { return 0.3 * x - 0.2 * y; };
+  core::TriMesh m = grid_surface(6, 6, 10.0, plane, 0, 50);          // x 0..50, y 0..50
+  const core::TriMesh b = grid_surface(6, 6, 10.0, plane, 50, 100);  // x 50..100, y 50..100
+  const std::uint32_t shared_a = 5, shared_b = 30;                   // (50, 50) in each
+  const auto offset = static_cast<std::uint32_t>(m.vertex_count());
+  auto in_m = [&](std::uint32_t v) {
+    return v == shared_b ? shared_a : v < shared_b ? offset + v : offset + v - 1;
+  };
+  for (std::uint32_t v = 0; v < b.vertex_count(); ++v) {
+    if (v != shared_b) m.xyz.insert(m.xyz.end(), &b.xyz[3 * v], &b.xyz[3 * v] + 3);
+  }
+  for (const auto& f : b.faces) m.faces.push_back({in_m(f[0]), in_m(f[1]), in_m(f[2])});
+  REQUIRE(m.xyz[3 * shared_a] == 50.0);
+  REQUIRE(m.xyz[3 * shared_a + 1] == 50.0);
+  core::SteinerGraph g(m, 3.0);
+  g.keep_vertex_angles();
+  core::PathStraightener s(g);
+  const auto pts = core::sample_uniform(m, 16, 5);
+  const core::SurfacePoint v{50.0, 50.0, plane(50.0, 50.0), 0};
+  auto first = [](const core::SurfacePoint& p) { return p.x + p.y < 100.0; };
+  int across = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const auto d = straightened(g, pts, i, s);
+    for (std::size_t j = 0, t = 0; j < pts.size(); ++j) {
+      if (j == i) continue;
+      CAPTURE(i, j);
+      const bool cut = first(pts[i]) != first(pts[j]);
+      across += cut;
+      const double expected = cut ? dist3(pts[i], v) + dist3(v, pts[j]) : dist3(pts[i], pts[j]);
+      CHECK(d[t] == Approx(expected).epsilon(1e-9));
+      ++t;
+    }
+  }
+  CHECK(across > 50);
+  CHECK(s.stats().failed == 0);
+}
+
 TEST_CASE("a path along a given route is pulled taut: the segment on a plane",
           "[core][geodesic][exact]") {
   // Routes that wander (seen from above) still give the straight segment: on a plane every
