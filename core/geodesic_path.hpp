@@ -34,8 +34,10 @@ class PathStraightener {
   // The length of the locally shortest surface path from source to target that starts in the
   // homotopy class of the Steiner path through `nodes` (GeodesicQuery::path). Never longer than
   // the Steiner path when it succeeds; a real path on the mesh, so never shorter than the exact
-  // geodesic. Returns a negative value when the path's strip cannot be unfolded (a degenerate
-  // face, an edge of more than two faces): the caller keeps the Steiner length then.
+  // geodesic. A path through a vertex from one of its fans to another (faces that meet at the
+  // vertex alone) is cut there, each part straightened on its own. Returns a negative value
+  // when the path's strip cannot be unfolded (a degenerate face, an edge of more than two
+  // faces): the caller keeps the Steiner length then.
   double length(const SurfacePoint& source, const std::vector<std::uint32_t>& nodes,
                 const SurfacePoint& target);
 
