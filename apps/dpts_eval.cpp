@@ -394,7 +394,7 @@ void print_report(const Options& o, const dpts::api::Evaluation& ev, double secs
     if (eo.straighten) {
       std::printf(
           "geodesics        Steiner paths straightened: %zu paths (%zu could not be, their "
-          "Steiner length kept); %zu pairs shorter along the other mesh's route\n",
+          "Steiner length kept); %zu distances shortened along the other mesh's routes\n",
           r.straightened, r.straighten_failed, r.shortened);
     } else {
       std::printf("geodesics        Steiner distances (the paper's; not straightened)\n");

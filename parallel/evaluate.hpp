@@ -173,7 +173,8 @@ struct EvalResult {
   // and those that could not be (a degenerate face: their Steiner length kept); the strips
   // pulled taut (one per pass) and the vertices rerouted around.
   std::size_t straightened = 0, straighten_failed = 0, straighten_passes = 0, reroutes = 0;
-  // Pair distances shortened along the other mesh's route (shorten_along), T and T' together.
+  // Pair distances shortened along the other mesh's route (shorten_along), T and T' together,
+  // once for each round that shortened one.
   std::size_t shortened = 0;
   // Pairs, all sets together: measured (in the set errors); not connected on T (a DEM whose
   // valid cells form islands: no distance to compare, left out of the mean); and at distance 0
