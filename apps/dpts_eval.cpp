@@ -71,9 +71,10 @@ delta along edges, each triangle's boundary points pairwise connected) with stra
 across faces (each label keeps the point its segment starts from and the part of its edge that
 point sees), each pair's two searches meeting in the middle (one way on a mesh with holes),
 then each path is unfolded and pulled taut into an exact, locally shortest geodesic, and each
-pair's route on either mesh is also pulled taut on the other, the shorter kept: under 0.01 %
-above exact on average on real DEMs at the default delta, and the measure within 1.7 % of the
-exact one (--steiner keeps the paper's Steiner distances, 0.7 % above).
+pair's route on either mesh is also pulled taut on the other (by turns, while either shortens),
+the shorter kept: under 0.01 % above exact on average on real DEMs at the default delta, and
+the measure within 1.4 % of the exact one (--steiner keeps the paper's Steiner distances,
+0.7 % above).
 The result is the mean over independent sets. Also reports the mesh's validity over
 the DEM (orientation, coverage, faces over no-data) and its vertical error at every valid
 cell centre.
@@ -126,7 +127,7 @@ cell centre.
                      so fewer threads search at once when all do not fit; where two do not,
                      the pairs are searched one way (about twice the time); a run that does
                      not fit with one is refused before the graphs are built; the pairs'
-                     arrays (8 x (5 x S + 10) bytes a pair) count too, and their routes kept
+                     arrays (8 x (6 x S + 10) bytes a pair) count too, and their routes kept
                      for the other mesh past 8 MB (or the memory left) go to an unnamed file
                      in TMPDIR (else /tmp)
   --json             print one JSON object with all figures as the last line
