@@ -68,6 +68,12 @@ double straight2(const std::vector<core::SurfacePoint>& points, std::size_t i, s
   return dx * dx + dy * dy + dz * dz;
 }
 
+// routes reset for the pairs of `points`, their offsets from the first point.
+void reset_routes(PairRoutes& routes, const std::vector<core::SurfacePoint>& points) {
+  routes.reset(points.size(),
+               {points.empty() ? 0.0 : points[0].x, points.empty() ? 0.0 : points[0].y});
+}
+
 // Path i -> j's route (route) stored in routes for the pair min(i, j) < max(i, j).
 PairRoutes::Id add_route(PairRoutes& routes, const std::vector<core::SurfacePoint>& points,
                          std::size_t i, std::size_t j, const core::PathRoute& route) {
@@ -707,8 +713,7 @@ std::vector<double> pairwise_in_arena(const core::SteinerGraph& graph,
     for (std::size_t j = i + 1; j < k; ++j) need[i * k + j] = 1;
   }
   if (options.straighten && options.routes_out) {
-    options.routes_out->reset(
-        k, {points.empty() ? 0.0 : points[0].x, points.empty() ? 0.0 : points[0].y});
+    reset_routes(*options.routes_out, points);
   }
   if (options.straighten && method == PairwiseMethod::kMeet && k >= 3) {
     return meet_straightened(graph, points, estimate, options.routes_out, stats, tokens, searched);
@@ -1190,11 +1195,6 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
       shortened_t.emplace_back(share);
     }
   }
-  // Store `store` reset for the routes of the pairs of `points`.
-  auto reset_for = [](PairRoutes& store, const std::vector<core::SurfacePoint>& points) {
-    store.reset(points.size(),
-                {points.empty() ? 0.0 : points[0].x, points.empty() ? 0.0 : points[0].y});
-  };
   const std::string kind = options.exact ? ": exact geodesics on T" : ": geodesics on T";
   for (const bool mesh_t : {false, true}) {
     if (!options.exact) {
@@ -1220,7 +1220,7 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
       if (mesh_t && routes) {
         // note: a pair shortened gets its new route too, for T' to try beside T's own (which
         // may still be the shorter there).
-        reset_for(shortened_t[set], on_t[set]);
+        reset_routes(shortened_t[set], on_t[set]);
         result.shortened +=
             shorten_along(*geo.graph_t, on_t[set], routes_s[set], dt[set], &shortened_t[set]);
         routes_s[set] = PairRoutes();
@@ -1251,14 +1251,16 @@ EvalResult evaluate_distances(const core::TriMesh& original, const core::TriMesh
               (round > 1 ? " again" : ""));
         shortened.emplace_back(share);
         const auto& points = on_t_now ? on_t[set] : on_s[set];
-        reset_for(shortened.back(), points);
+        // note: the last round's shortened paths have no round after them to try them.
+        PairRoutes* const out = round + 1 < kRouteRounds ? &shortened.back() : nullptr;
+        if (out) reset_routes(*out, points);
         const auto& graph = on_t_now ? *geo.graph_t : *geo.graph_s;
         auto& d = (on_t_now ? dt : ds)[set];
         if (round == 0) {
-          n += shorten_along(graph, points, routes_t[set], d, &shortened.back());
+          n += shorten_along(graph, points, routes_t[set], d, out);
           routes_t[set] = PairRoutes();
         }
-        n += shorten_along(graph, points, tried[set], d, &shortened.back());
+        n += shorten_along(graph, points, tried[set], d, out);
         tried[set] = PairRoutes();
       }
       result.shortened += n;
