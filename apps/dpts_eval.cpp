@@ -572,7 +572,7 @@ int main(int argc, char** argv) {
   try {
     return run(parse(std::vector<std::string>(argv + 1, argv + argc)));
   } catch (const dpts::UsageError& e) {
-    std::cerr << "dpts-eval: " << e.what() << "\nTry 'dpts-eval --help' for more information.\n";
+    std::cerr << "dpts-eval: " << e.what() << "; see dpts-eval --help\n";
     return 2;
   } catch (const dpts::Cancelled&) {
     std::cerr << "dpts-eval: interrupted; no output written\n";

@@ -521,8 +521,8 @@ int par_main(int argc, char** argv) {
     if (!o.batch.empty()) return dpts::cli::run_batch(o, self_path(argv[0]), &g_cancel);
     return report("ok", run(o), "");
   } catch (const dpts::UsageError& e) {
-    std::cerr << DPTS_PROG ": " << e.what()
-              << "\nTry '" DPTS_PROG " --help' for more information.\n";
+    // note: one line, the pointer to --help on it (bad input gets one line, usage too).
+    std::cerr << DPTS_PROG ": " << e.what() << "; see " DPTS_PROG " --help\n";
     return report("failed", 2, e.what());
   } catch (const dpts::Cancelled&) {
     std::cerr << "\n" DPTS_PROG ": interrupted; no output written\n";

@@ -35,7 +35,7 @@ TEST_CASE("each bad input gets its exit code, a one-line message and no output",
     const std::string prefix = c.exit_code == 2 ? "dpts-par: " : "dpts-par: error: ";
     CHECK(r.err.rfind(prefix + c.message, 0) == 0);
     const auto lines = std::count(r.err.begin(), r.err.end(), '\n');
-    CHECK(lines == (c.exit_code == 2 ? 2 : 1));  // usage errors add a pointer to --help
+    CHECK(lines == 1);
     CHECK_FALSE(output_files_left(dir));
   }
 }

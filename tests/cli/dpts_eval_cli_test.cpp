@@ -369,9 +369,11 @@ TEST_CASE("dpts-eval refuses --sample-points with --points or --sets, and output
     const auto r =
         test::run(kEval, {"--dem", fx.dem, "--mesh", "m.ply", "--sample-points", pts, flag, "5"});
     CHECK(r.exit_code == 2);
-    CHECK(r.err.rfind("dpts-eval: --sample-points and " + std::string(flag) +
-                          " cannot be combined (the file gives the points and sets)\n",
-                      0) == 0);
+    CHECK(
+        r.err.rfind(
+            "dpts-eval: --sample-points and " + std::string(flag) +
+                " cannot be combined (the file gives the points and sets); see dpts-eval --help\n",
+            0) == 0);
   }
   const auto exact =
       test::run(kEval, {"--dem", fx.dem, "--mesh", "m.ply", "--exact", "--delta", "3"});
@@ -380,7 +382,9 @@ TEST_CASE("dpts-eval refuses --sample-points with --points or --sets, and output
   const auto over = test::run(
       kEval, {"--dem", fx.dem, "--mesh", "m.ply", "--sample-points", pts, "--pairs-out", pts});
   CHECK(over.exit_code == 2);
-  CHECK(over.err.rfind("dpts-eval: --pairs-out " + pts + ": is an input of the run\n", 0) == 0);
+  CHECK(over.err.rfind(
+            "dpts-eval: --pairs-out " + pts + ": is an input of the run; see dpts-eval --help\n",
+            0) == 0);
 }
 
 TEST_CASE("dpts-eval draws the error map and the hillshades, only when the run succeeds",
@@ -409,15 +413,20 @@ TEST_CASE("dpts-eval draws the error map and the hillshades, only when the run s
   CHECK_FALSE(std::filesystem::exists(shade));
   const auto edges = test::run(kEval, {"--dem", fx.dem, "--mesh", mesh, "--edges"});
   CHECK(edges.exit_code == 2);
-  CHECK(edges.err.rfind("dpts-eval: --edges: needs --hillshade-compare\n", 0) == 0);
+  CHECK(edges.err.rfind("dpts-eval: --edges: needs --hillshade-compare; see dpts-eval --help\n",
+                        0) == 0);
   const auto over = test::run(kEval, {"--dem", fx.dem, "--mesh", mesh, "--error-map", mesh});
   CHECK(over.exit_code == 2);
-  CHECK(over.err.rfind("dpts-eval: --error-map " + mesh + ": is an input of the run\n", 0) == 0);
+  CHECK(over.err.rfind(
+            "dpts-eval: --error-map " + mesh + ": is an input of the run; see dpts-eval --help\n",
+            0) == 0);
   // Two outputs in one file: refused (the later would replace the earlier), not written.
   const auto twice = test::run(kEval, {"--dem", fx.dem, "--mesh", mesh, "--error-map", map,
                                        "--pairs-out", (fx.dir / "." / "error.png").string()});
   CHECK(twice.exit_code == 2);
-  CHECK(twice.err.rfind("dpts-eval: --pairs-out and --error-map: the same file\n", 0) == 0);
+  CHECK(twice.err.rfind(
+            "dpts-eval: --pairs-out and --error-map: the same file; see dpts-eval --help\n", 0) ==
+        0);
   CHECK_FALSE(std::filesystem::exists(map));
   const auto nowhere = test::run(
       kEval, {"--dem", fx.dem, "--mesh", mesh, "--hillshade-compare", "/nonexistent/s.png"});
@@ -437,10 +446,11 @@ TEST_CASE("dpts-eval reads flags as dpts-par does: --flag=value, and -- ends the
   CHECK(io::json_field(last_line(r.out), "sets") == "1");
   const auto after = test::run(kEval, {"--dem", fx.dem, "--mesh", mesh, "--", "--points"});
   CHECK(after.exit_code == 2);
-  CHECK(after.err.rfind("dpts-eval: --points: unexpected argument\n", 0) == 0);
+  CHECK(after.err.rfind("dpts-eval: --points: unexpected argument; see dpts-eval --help\n", 0) ==
+        0);
   const auto missing = test::run(kEval, {"--dem", fx.dem, "--mesh"});
   CHECK(missing.exit_code == 2);
-  CHECK(missing.err.rfind("dpts-eval: --mesh: missing value\n", 0) == 0);
+  CHECK(missing.err.rfind("dpts-eval: --mesh: missing value; see dpts-eval --help\n", 0) == 0);
 }
 
 TEST_CASE("dpts-eval refuses --points whose pair tables cannot fit, before any work",
@@ -483,8 +493,9 @@ TEST_CASE("dpts-eval refuses a --pairs-out that is a file of the DEM's dataset",
   const std::string before = test::file_bytes(hdr);
   const auto r = test::run(kEval, {"--dem", dem, "--mesh", "m.ply", "--pairs-out", hdr});
   CHECK(r.exit_code == 2);
-  CHECK(r.err.rfind("dpts-eval: --pairs-out " + hdr + ": is " + hdr + ", a file of the DEM\n", 0) ==
-        0);
+  CHECK(r.err.rfind("dpts-eval: --pairs-out " + hdr + ": is " + hdr +
+                        ", a file of the DEM; see dpts-eval --help\n",
+                    0) == 0);
   CHECK(test::file_bytes(hdr) == before);
 }
 
