@@ -44,10 +44,13 @@ fs::path follow_links(fs::path path) {
 }
 
 // The temporary name's start, before mkstemp's 6 characters: 16 bytes longer than the
-// output's name in all, so a name near the limit of 255 (NAME_MAX) is cut for it.
+// output's name in all, so a name near the limit of 255 (NAME_MAX) is cut for it, with room
+// for the 8 SQLite adds to a GeoPackage's for its journal ("-journal"): a GeoPackage named
+// 235 to 255 bytes failed on it ("unable to open database file").
 std::string temp_prefix(const fs::path& final_path) {
+  constexpr std::size_t kJournal = 8;
   std::string base = final_path.filename().string();
-  if (base.size() > 255 - 16) base.resize(255 - 16);
+  if (base.size() > 255 - 16 - kJournal) base.resize(255 - 16 - kJournal);
   return "." + base + ".partial-";
 }
 

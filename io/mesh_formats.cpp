@@ -137,6 +137,9 @@ struct DatasetCloser {
   }
 };
 
+// The last change date a GeoPackage is written with (ISO 8601, as GDAL's OGR_CURRENT_DATE).
+constexpr const char* kGpkgDate = "2000-01-01T00:00:00.000Z";
+
 void write_gpkg(const std::filesystem::path& path, const Mesh& mesh,
                 const MeshWriteOptions& options) {
   GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GPKG");
@@ -147,6 +150,17 @@ void write_gpkg(const std::filesystem::path& path, const Mesh& mesh,
   struct Pop {
     ~Pop() { CPLPopErrorHandler(); }
   } pop;
+  // note: GDAL stamps the layer's last change (gpkg_contents) with the time of writing, so
+  // that no two runs gave the same bytes: a fixed date instead, unless the caller set one
+  // (--config OGR_CURRENT_DATE).
+  const bool dated = CPLGetConfigOption("OGR_CURRENT_DATE", nullptr) != nullptr;
+  if (!dated) CPLSetThreadLocalConfigOption("OGR_CURRENT_DATE", kGpkgDate);
+  struct Undate {
+    bool dated;
+    ~Undate() {
+      if (!dated) CPLSetThreadLocalConfigOption("OGR_CURRENT_DATE", nullptr);
+    }
+  } undate{dated};
   CPLErrorReset();
   std::unique_ptr<GDALDataset, DatasetCloser> ds(
       driver->Create(path.c_str(), 0, 0, 0, GDT_Unknown, nullptr));

@@ -5,8 +5,10 @@
 #include <ogrsf_frmts.h>
 
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <cstring>
 #include <fstream>
+#include <thread>
 
 #include "core/errors.hpp"
 #include "io/atomic_output_file.hpp"
@@ -139,6 +141,21 @@ TEST_CASE("GeoPackage: one Polygon Z layer, a feature per face, with the CRS", "
   CPLFree(wkt);
   OGRFeature::DestroyFeature(f);
   GDALClose(ds);
+}
+
+TEST_CASE("a GeoPackage is the same bytes each time, and a long name fits", "[io]") {
+  GDALAllRegister();
+  test::TempDir one, two;
+  io::MeshWriteOptions o;
+  o.format = io::MeshFormat::gpkg;
+  o.crs_wkt = test::epsg_wkt(32611);
+  const auto first = test::file_bytes(write(one, "m.gpkg", square(), o));
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));  // GDAL's clock has ms
+  CHECK(test::file_bytes(write(two, "m.gpkg", square(), o)) == first);
+  // SQLite's journal beside the temporary file must fit NAME_MAX (255) too.
+  const std::string name = std::string(250, 'g') + ".gpkg";
+  write(one, name, square(), o);
+  CHECK(std::filesystem::file_size(one.path() / name) > 0);
 }
 
 TEST_CASE("a GeoPackage refuses a stream output", "[io]") {
