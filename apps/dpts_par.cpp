@@ -79,9 +79,8 @@ void record_output(const dpts::cli::ParOptions& o, const dpts::io::DemInfo& dem,
   g_report.output_json = dpts::cli::output_json(o.output, kept, faces, file);
 }
 
-void print_notes(const dpts::io::DemInfo& dem, const dpts::cli::ParOptions& o) {
-  if (!g_report.path.empty()) g_report.input_json = dpts::cli::input_json(dem, 0, 0);
-  for (const std::string& note : dem.notes) {
+void print_notes(const std::vector<std::string>& notes, const dpts::cli::ParOptions& o) {
+  for (const std::string& note : notes) {
     if (!o.quiet || note.rfind("warning", 0) == 0) std::cerr << DPTS_PROG ": " << note << "\n";
   }
 }
@@ -302,11 +301,29 @@ int simplify_and_write(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinte
   r.qem_engine = simplify_qem_ranks;
 #endif
   std::optional<io::AtomicOutputFile> out;
+  // note: the input's notes (its CRS projected, scale and offset, bands) are printed once its
+  // cells are counted: the piece engines learn only then that a band is all no-data, and a
+  // refused input gets its one line alone.
+  std::vector<std::string> notes;
+  bool notes_due = false;
+  auto flush_notes = [&] {
+    if (!notes_due) return;
+    notes_due = false;
+    printer.finish();
+    print_notes(notes, o);
+  };
   r.on_input = [&](const io::DemInfo& dem) {
-    print_notes(dem, o);
+    if (!g_report.path.empty()) g_report.input_json = cli::input_json(dem, 0, 0);
+    notes = dem.notes;
+    notes_due = true;
     out.emplace(o.output);  // the input is valid: now claim the output (fails early)
   };
-  api::Simplification result = api::simplify(open_input(o), o.input, r, progress);
+  const core::Progress noted = [&](double f, std::string_view stage) {
+    if (stage != "count") flush_notes();
+    return progress(f, stage);
+  };
+  api::Simplification result = api::simplify(open_input(o), o.input, r, noted);
+  flush_notes();
   printer.finish();
   after_simplify(o, result);
   const std::size_t faces = result.face_count();

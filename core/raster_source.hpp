@@ -51,8 +51,14 @@ class RasterSource {
   virtual bool empty(int /*col0*/, int /*row0*/, int /*width*/, int /*height*/) const {
     return false;
   }
-  // The message for a raster without a valid cell, naming the input.
-  virtual std::string no_valid_cell_message() const { return name_ + ": has no valid cell"; }
+  // The message for a raster without a valid cell, naming the input; absurd_cells: cells
+  // whose heights were read as no-data for their size (beyond +-1e7).
+  virtual std::string no_valid_cell_message(std::size_t absurd_cells) const {
+    return name_ + ": has no valid cell" +
+           (absurd_cells > 0 ? " (" + std::to_string(absurd_cells) +
+                                   " with heights beyond +-1e7, read as no-data)"
+                             : std::string());
+  }
 
   // The output CRS. reprojected: the cells' positions there are not linear in the frame (a
   // geographic DEM projected to UTM), so the engines place vertices by output_xy_of_grid.

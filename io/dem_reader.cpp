@@ -726,10 +726,15 @@ std::string absurd_heights_note(const DemInfo& dem, std::size_t count) {
          " cells with heights beyond +-1e7 read as no-data";
 }
 
-std::string all_nodata_message(const DemInfo& dem) {
+std::string all_nodata_message(const DemInfo& dem, std::size_t absurd_cells) {
   char nodata[48] = "";
   if (dem.has_nodata) std::snprintf(nodata, sizeof nodata, " (no-data value %.17g)", dem.nodata);
-  return dem.path + ": band " + std::to_string(dem.band) + " is all no-data" + nodata;
+  const std::string absurd =
+      absurd_cells > 0 ? ": " + std::to_string(absurd_cells) +
+                             " cells hold heights beyond +-1e7, read as no-data (wrong units, "
+                             "scale or offset?)"
+                       : "";
+  return dem.path + ": band " + std::to_string(dem.band) + " is all no-data" + nodata + absurd;
 }
 
 void check_whole_size(const DemInfo& dem, const std::string& what) {
@@ -765,7 +770,9 @@ bool GdalRaster::empty(int col0, int row0, int width, int height) const {
   return reader_.empty(col0, row0, width, height);
 }
 
-std::string GdalRaster::no_valid_cell_message() const { return all_nodata_message(info_); }
+std::string GdalRaster::no_valid_cell_message(std::size_t absurd_cells) const {
+  return all_nodata_message(info_, absurd_cells);
+}
 
 Dem read_dem(DemInfo info, const core::Progress& progress) {
   check_whole_size(info, "reading it whole (32-bit cell ids)");
@@ -776,7 +783,7 @@ Dem read_dem(DemInfo info, const core::Progress& progress) {
   for (double z : dem.grid.z) dem.valid_cells += std::isnan(z) ? 0 : 1;
   if (reader.absurd_cells() > 0)
     dem.notes.push_back(absurd_heights_note(dem, reader.absurd_cells()));
-  if (dem.valid_cells == 0) throw InputError(all_nodata_message(dem));
+  if (dem.valid_cells == 0) throw InputError(all_nodata_message(dem, reader.absurd_cells()));
   return dem;
 }
 

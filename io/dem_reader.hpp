@@ -196,7 +196,7 @@ class GdalRaster final : public core::RasterSource {
   core::HeightGrid read(int col0, int row0, int width, int height,
                         Implausible* implausible = nullptr) const override;
   bool empty(int col0, int row0, int width, int height) const override;
-  std::string no_valid_cell_message() const override;
+  std::string no_valid_cell_message(std::size_t absurd_cells) const override;
   bool reprojected() const override { return info_.to_output != nullptr; }
   std::vector<double> output_xy_of_grid(const std::vector<double>& grid_xy) const override {
     return info_.output_xy_of_grid_concurrent(grid_xy);
@@ -222,8 +222,9 @@ class GdalRaster final : public core::RasterSource {
 // A warning for `count` cells read as no-data because of absurd heights ("" when none).
 std::string absurd_heights_note(const DemInfo& dem, std::size_t count);
 
-// The message for a DEM whose band has no valid cell, naming the file and the band.
-std::string all_nodata_message(const DemInfo& dem);
+// The message for a DEM whose band has no valid cell, naming the file and the band, and how
+// many cells held heights beyond +-1e7 (read as no-data), if any.
+std::string all_nodata_message(const DemInfo& dem, std::size_t absurd_cells = 0);
 
 // Reads the band of `path` (options.band), at most core::kMaxGridCells cells. No-data cells, NaN,
 // infinite and absurd heights become NaN. Checks the raster before reading it and throws InputError

@@ -337,7 +337,7 @@ std::vector<core::Piece> divide_dem(const core::RasterSource& dem, const KeepTar
   st.block = bc.block;
   st.count_s = seconds_since(t0);
   if (st.valid_cells == 0) {
-    throw InputError(dem.no_valid_cell_message());
+    throw InputError(dem.no_valid_cell_message(st.absurd_cells));
   }
   core::DivisionOptions div;
   div.levels = levels;

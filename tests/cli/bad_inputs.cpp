@@ -109,6 +109,25 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
   add("all no-data (vp)", {all_void, out}, 1, all_void + ": band 1 is all no-data (no-data value -9999)");
   add("all no-data (vp-meta)", {"--algo", "vp-meta", all_void, out}, 1,
       all_void + ": band 1 is all no-data (no-data value -9999)");
+  {
+    // A geographic one: the note of its projection to UTM is held back until its cells are
+    // counted, so the refusal is the one line (the piece engines count after opening).
+    RasterSpec geographic = nodata;
+    geographic.wkt = epsg_wkt(4326);
+    geographic.geotransform = {7.0, 0.001, 0, 46.0, 0, -0.001};
+    const std::string geo_void = raster(
+        "geo_void.tif", 8, 8, [](int, int) { return kNaN; }, geographic);
+    add("all no-data, geographic (qem)", {geo_void, out}, 1,
+        geo_void + ": band 1 is all no-data (no-data value -9999)");
+    add("all no-data, geographic (vp-meta)", {"--algo", "vp-meta", geo_void, out}, 1,
+        geo_void + ": band 1 is all no-data (no-data value -9999)");
+    // Every height absurd (read as no-data): the message says so.
+    const std::string huge = raster("huge.tif", 8, 8, [](int, int) { return 3e7; });
+    const std::string why =
+        huge + ": band 1 is all no-data: 64 cells hold heights beyond +-1e7, read as no-data";
+    add("every height beyond 1e7 (qem)", {huge, out}, 1, why);
+    add("every height beyond 1e7 (vp)", {"--algo", "vp", huge, out}, 1, why);
+  }
   const std::string one = raster(
       "one_cell.tif", 8, 8, [](int c, int r) { return c == 3 && r == 3 ? 5.0 : kNaN; }, nodata);
   add("one valid cell", {one, out}, 1, one + ": no three neighbouring valid cells");
