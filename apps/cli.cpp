@@ -97,7 +97,7 @@ output; INPUT - is standard input (GDAL's /vsistdin/).
                        memory than MB (default: the memory available when it starts)
   --report FILE.json   write a JSON report of the run (input, options, output with its
                        sha256, per-stage wall and CPU times, peak memory, pieces), also
-                       when it fails
+                       when it fails (not when the command line cannot be read)
   --format F           output format: ply (default), obj (Wavefront), stl (binary; float32
                        coordinates) or gpkg (GeoPackage: one layer of triangles as Polygon Z
                        features, with the CRS; opens in QGIS); default: OUTPUT's extension

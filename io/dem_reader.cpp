@@ -246,18 +246,37 @@ std::function<bool(std::uint64_t, std::uint64_t)> DemInfo::outline_chord_test(
 
 namespace {
 
-// Metres per unit of a band's height unit ("m", "metre", "ft", "US survey foot"...); 1 when
-// it is metres, empty or not a unit of length GDAL names.
+// Metres per unit of a band's height unit ("m", "metre", "ft", "US survey foot", "km"...): 1
+// when it is metres or empty (also "metres above sea level", "m MSL": metres and a datum), 0
+// when it is not a unit dpts knows.
 double height_unit_metres(std::string unit) {
   std::transform(unit.begin(), unit.end(), unit.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string first = unit.substr(0, unit.find_first_of(" _("));
+  if (first.empty() || first == "m" || first == "metre" || first == "metres" || first == "meter" ||
+      first == "meters") {
+    return 1.0;
+  }
   if (unit == "ft" || unit == "foot" || unit == "feet" || unit == "international foot") {
     return 0.3048;
   }
   if (unit == "us survey foot" || unit == "us-ft" || unit == "ftus" || unit == "us_survey_foot") {
     return 1200.0 / 3937.0;
   }
-  return 1.0;
+  if (unit == "km" || unit == "kilometre" || unit == "kilometres" || unit == "kilometer" ||
+      unit == "kilometers") {
+    return 1000.0;
+  }
+  if (unit == "dm") return 0.1;
+  if (unit == "cm" || unit == "centimetre" || unit == "centimetres" || unit == "centimeter" ||
+      unit == "centimeters") {
+    return 0.01;
+  }
+  if (unit == "mm" || unit == "millimetre" || unit == "millimetres" || unit == "millimeter" ||
+      unit == "millimeters") {
+    return 0.001;
+  }
+  return 0.0;  // not known
 }
 
 // A raw raster (ENVI, EHdr and the like: a header and a plain data file) cut short reads as
@@ -544,13 +563,17 @@ void read_band_info(GDALRasterBand* band, const std::string& path, DemInfo& dem)
                   path.c_str(), dem.scale, dem.offset);
     dem.notes.push_back(note);
   }
-  // Heights in feet (the band's unit type) become metres, as the output's heights are.
-  const double foot_m = height_unit_metres(band->GetUnitType() ? band->GetUnitType() : "");
-  if (foot_m != 1.0) {
-    dem.scale *= foot_m;
-    dem.offset *= foot_m;
-    dem.notes.push_back(path + ": heights in " + band->GetUnitType() +
-                        " (the band's unit), converted to metres");
+  // Heights in feet, km, cm or mm (the band's unit type) become metres, as the output's
+  // heights are; a unit not known is said, and its values read as metres.
+  const std::string unit = band->GetUnitType() ? band->GetUnitType() : "";
+  const double unit_m = height_unit_metres(unit);
+  if (unit_m == 0.0) {
+    dem.notes.push_back("warning: " + path + ": heights in '" + unit +
+                        "' (the band's unit), a unit dpts does not know; read as metres");
+  } else if (unit_m != 1.0) {
+    dem.scale *= unit_m;
+    dem.offset *= unit_m;
+    dem.notes.push_back(path + ": heights in " + unit + " (the band's unit), converted to metres");
   }
   band->GetBlockSize(&dem.block_width, &dem.block_height);
   dem.block_width = std::max(1, dem.block_width);

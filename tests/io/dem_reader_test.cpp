@@ -212,7 +212,7 @@ TEST_CASE("longitudes 0-360 get the UTM zone of their meridian", "[io][dem][robu
   CHECK(xy[0] == Approx(448000).margin(3000));  // 0.5 degrees west of 159W at 20N: ~52 km
 }
 
-TEST_CASE("a geocentric CRS is refused, and heights in feet become metres", "[io][dem][robust]") {
+TEST_CASE("a geocentric CRS is refused, and heights in feet, km or cm become metres", "[io][dem][robust]") {
   GDALAllRegister();
   test::TempDir dir;
   const auto g = test::make_grid(10, 10, [](int c, int r) { return 100.0 + c + r; });
@@ -240,6 +240,31 @@ TEST_CASE("a geocentric CRS is refused, and heights in feet become metres", "[io
   bool said = false;
   for (const auto& n : dem.notes) said = said || n.find("heights in ft") != std::string::npos;
   CHECK(said);
+  // Other units: km and cm converted, "metres above sea level" metres, one not known said.
+  auto with_unit = [&](const std::string& name, const std::string& unit) {
+    std::ofstream(dir / name) << "<VRTDataset rasterXSize=\"10\" rasterYSize=\"10\"><GeoTransform>"
+                                 "400000, 10, 0, 3800000, 0, -10</GeoTransform><VRTRasterBand "
+                                 "dataType=\"Float32\" band=\"1\"><UnitType>"
+                              << unit
+                              << "</UnitType><SimpleSource><SourceFilename relativeToVRT=\"1\">"
+                                 "dem.tif</SourceFilename><SourceBand>1</SourceBand></SimpleSource>"
+                                 "</VRTRasterBand></VRTDataset>\n";
+    return io::read_dem((dir / name).string(), {}, nullptr);
+  };
+  auto warned = [](const io::Dem& d) {
+    bool w = false;
+    for (const auto& n : d.notes) w = w || n.find("a unit dpts does not know") != std::string::npos;
+    return w;
+  };
+  const io::Dem km = with_unit("km.vrt", "km");
+  CHECK(km.grid.z[0] == Approx(100000.0).epsilon(1e-12));
+  CHECK(with_unit("cm.vrt", "cm").grid.z[0] == Approx(1.0).epsilon(1e-12));
+  const io::Dem asl = with_unit("asl.vrt", "metres above sea level");
+  CHECK(asl.grid.z[0] == 100.0);
+  CHECK_FALSE(warned(asl));
+  const io::Dem odd = with_unit("odd.vrt", "furlong");
+  CHECK(odd.grid.z[0] == 100.0);
+  CHECK(warned(odd));
 }
 
 TEST_CASE("cells masked out by a mask or alpha band are no-data", "[io][dem][robust]") {
