@@ -511,7 +511,11 @@ void set_output_crs(GDALDataset& ds, const std::string& path, const DemReadOptio
       }
       int ok[4] = {0, 0, 0, 0};
       if (!dem.to_output->Transform(4, x, y, nullptr, ok) || !ok[0] || !ok[1] || !ok[2] || !ok[3]) {
-        throw InputError(path + ": cannot project its centre to " + dem.output_crs_name);
+        // note: the points half a DEM's width and height apart round its centre (the
+        // frame's), which a whole-world DEM puts 90 degrees from a UTM zone's meridian.
+        throw InputError(path + ": cannot project the half of it round its centre to " +
+                         dem.output_crs_name +
+                         " (too wide for that CRS, or past a pole); choose one with --t-srs");
       }
       jac[0][0] = (x[1] - x[0]) / (2 * hc) * unit_m, jac[1][0] = (y[1] - y[0]) / (2 * hc) * unit_m;
       jac[0][1] = (x[3] - x[2]) / (2 * hr) * unit_m, jac[1][1] = (y[3] - y[2]) / (2 * hr) * unit_m;

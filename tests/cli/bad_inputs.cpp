@@ -248,6 +248,18 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
      {"--algo", "vp-meta", "--max-memory", "16", fine, out});
   RasterSpec rotated;
   rotated.geotransform = {400000, 8, 6, 3800000, 6, -8};
+  // qslim locks its outline: a strip two cells wide keeps every vertex, and says why.
+  ok("a strip 2 cells wide (qslim)", {"--algo", "qslim", raster("strip.tif", 50, 2, hill), out},
+     "warning: kept 100 vertices, not 10: qslim keeps every vertex of the outline");
+  {
+    // A whole-world geographic DEM: its UTM zone cannot hold it.
+    RasterSpec world;
+    world.wkt = epsg_wkt(4326);
+    world.geotransform = {-180, 6, 0, 90, 0, -6};
+    const std::string whole = raster("world.tif", 60, 30, hill, world);
+    add("the whole world in EPSG:4326", {whole, out}, 1,
+        whole + ": cannot project the half of it round its centre to WGS 84 / UTM zone ");
+  }
   ok("rotated geotransform", {raster("rotated.tif", 20, 15, hill, rotated), out});
   RasterSpec sheared;
   sheared.geotransform = {400000, 10, 4, 3800000, 0, -10};
