@@ -64,6 +64,10 @@ T parse_number(const std::string& flag, const std::string& text, T min, const ch
   return value;
 }
 
+// A message as one line: line breaks (a path may hold them) written \n and \r, other control
+// characters as '?'. Errors are one line.
+std::string one_line(std::string_view message);
+
 // Whether two paths name the same file (the same inode, or the same path once resolved):
 // outputs must not overwrite inputs.
 bool same_file(const std::string& a, const std::string& b);

@@ -572,7 +572,7 @@ int main(int argc, char** argv) {
   try {
     return run(parse(std::vector<std::string>(argv + 1, argv + argc)));
   } catch (const dpts::UsageError& e) {
-    std::cerr << "dpts-eval: " << e.what() << "; see dpts-eval --help\n";
+    std::cerr << "dpts-eval: " << dpts::cli::one_line(e.what()) << "; see dpts-eval --help\n";
     return 2;
   } catch (const dpts::Cancelled&) {
     std::cerr << "dpts-eval: interrupted; no output written\n";
@@ -583,7 +583,7 @@ int main(int argc, char** argv) {
     return 1;
 
   } catch (const std::exception& e) {
-    std::cerr << "dpts-eval: error: " << e.what() << "\n";
+    std::cerr << "dpts-eval: error: " << dpts::cli::one_line(e.what()) << "\n";
     return 1;
   }
 }

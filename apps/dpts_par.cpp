@@ -542,7 +542,7 @@ int par_main(int argc, char** argv) {
     return report("ok", run(o), "");
   } catch (const dpts::UsageError& e) {
     // note: one line, the pointer to --help on it (bad input gets one line, usage too).
-    std::cerr << DPTS_PROG ": " << e.what() << "; see " DPTS_PROG " --help\n";
+    std::cerr << DPTS_PROG ": " << dpts::cli::one_line(e.what()) << "; see " DPTS_PROG " --help\n";
     return report("failed", 2, e.what());
   } catch (const dpts::Cancelled&) {
     std::cerr << "\n" DPTS_PROG ": interrupted; no output written\n";
@@ -556,7 +556,7 @@ int par_main(int argc, char** argv) {
     std::cerr << DPTS_PROG ": error: " << why << "\n";
     return report("failed", 1, why);
   } catch (const std::exception& e) {
-    std::cerr << DPTS_PROG ": error: " << e.what() << "\n";
+    std::cerr << DPTS_PROG ": error: " << dpts::cli::one_line(e.what()) << "\n";
     return report("failed", 1, e.what());
   }
 }

@@ -38,6 +38,8 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
 
   // Files that are not rasters, or not whole.
   add("missing file", {path("missing.tif"), out}, 1, path("missing.tif") + ": no such file");
+  add("missing file, a line break in its name", {path("miss\ning.tif"), out}, 1,
+      path("miss") + "\\ning.tif: no such file");  // one line: the break written \n
   fs::create_directories(dir / "folder.tif");
   add("a directory", {path("folder.tif"), out}, 1,
       path("folder.tif") + ": is a directory, not a raster");
