@@ -339,17 +339,7 @@ double PathStraightener::length(const SurfacePoint& source, const std::vector<st
   // length, 64 of the pairs' distances on the two meshes.
   const TriMesh& m = g_.mesh();
   split_ = false;
-  PathRoute cut, part;
-  // The last part's route appended to cut, then `end` (a vertex it was cut at) if given.
-  auto append = [&](const SurfacePoint* end) {
-    taut_route(part);
-    cut.bends.insert(cut.bends.end(), part.bends.begin(), part.bends.end());
-    cut.taut.insert(cut.taut.end(), part.taut.begin(), part.taut.end());
-    if (end) {
-      cut.bends.push_back({end->x, end->y});
-      cut.taut.push_back({end->x, end->y});
-    }
-  };
+  PathRoute cut;
   double total = 0;
   SurfacePoint from = source;
   std::size_t begin = 0;
@@ -366,17 +356,27 @@ double PathStraightener::length(const SurfacePoint& source, const std::vector<st
     const double len = pull_taut(from, at);
     if (len < 0) return -1;
     total += len;
-    append(&at);
+    append_part(cut, &at);
     from = at;
     from.face = next_face;
     begin = pinch + 1;
   }
   const double last = pull_taut(from, target);
   if (last < 0 || begin == 0) return last;
-  append(nullptr);
+  append_part(cut, nullptr);
   split_route_ = std::move(cut);
   split_ = true;
   return total + last;
+}
+
+void PathStraightener::append_part(PathRoute& cut, const SurfacePoint* end) {
+  taut_route(part_);
+  cut.bends.insert(cut.bends.end(), part_.bends.begin(), part_.bends.end());
+  cut.taut.insert(cut.taut.end(), part_.taut.begin(), part_.taut.end());
+  if (end) {
+    cut.bends.push_back({end->x, end->y});
+    cut.taut.push_back({end->x, end->y});
+  }
 }
 
 double PathStraightener::pull_taut(const SurfacePoint& source, const SurfacePoint& target) {
@@ -647,10 +647,31 @@ double PathStraightener::follow(const SurfacePoint& source,
   std::uint32_t f = source.face;
   int entry = -1;
   std::size_t steps = 0;
+  // note: a route through a vertex from one of its fans to another (where a void touches
+  // itself corner to corner) is cut there, as length() cuts a path: the strip so far pulled
+  // taut to the vertex, the rest from it, their lengths added.
+  SurfacePoint from = source;
+  PathRoute cut;
+  double total = 0;
+  bool was_cut = false;
   // From f to face g around their common corner v (the side with fewer faces between).
   auto around = [&](std::uint32_t v, std::uint32_t g) {
     if (g == f) return true;
-    if (!walk_around(v, f, g, true, SteinerGraph::kNoFace, fan_)) return false;
+    if (!walk_around(v, f, g, true, SteinerGraph::kNoFace, fan_)) {
+      // g lies in another of v's fans: the path so far ends at v.
+      const SurfacePoint at{m.xyz[3 * v], m.xyz[3 * v + 1], m.xyz[3 * v + 2], f};
+      const double len = pull_taut(from, at);
+      if (len < 0) return false;
+      total += len;
+      append_part(cut, &at);
+      was_cut = true;
+      from = at;
+      from.face = g;
+      strip_.clear();
+      push_face(g);
+      f = g;
+      return true;
+    }
     for (std::uint32_t h : fan_) push_face(h);
     push_face(g);
     f = g;
@@ -716,10 +737,16 @@ double PathStraightener::follow(const SurfacePoint& source,
       if (shared == SteinerGraph::kNoFace || !around(shared, target.face)) return failed();
     }
   }
-  if (strip_.front() != source.face || strip_.back() != target.face) return failed();
-  const double len = pull_taut(source, target);
-  if (taut && len >= 0) taut_route(*taut);
-  return len;
+  if (strip_.front() != from.face || strip_.back() != target.face) return failed();
+  const double len = pull_taut(from, target);
+  if (len < 0) return len;
+  if (was_cut) {
+    append_part(cut, nullptr);
+    split_route_ = std::move(cut);
+    split_ = true;
+  }
+  if (taut) taut_route(*taut);
+  return total + len;
 }
 
 double PathStraightener::along(const SurfacePoint& source,

@@ -125,6 +125,9 @@ class PathStraightener {
                 double& ta, double& tb) const;
   // The last taut path's route (from source to target), into route.
   void taut_route(PathRoute& route) const;
+  // The last taut path's route appended to `cut` (a path cut at vertices between fans), then
+  // `end` (the vertex it was cut at) if given.
+  void append_part(PathRoute& cut, const SurfacePoint* end);
   // The strip of faces of the path from source through nodes[begin..] to target; false where
   // it cannot be made, with pinch the index of the node where the path passes between two fans
   // of a vertex (the strip then ends at it) and next_face the face it goes on in (pinch
@@ -161,10 +164,11 @@ class PathStraightener {
   std::vector<Point2> taut_;  // the taut path's points
   std::vector<Bend> bends_;
   std::vector<std::uint32_t> path_, around_, tried_, on_paths_;
+  PathRoute part_;  // append_part's scratch
   Stats stats_;
   std::array<double, 2> source_xy_{}, target_xy_{};  // the last taut path's ends
-  // The last path of length() cut at vertices between fans (split_): its parts' routes and
-  // the vertices between them, which taut_route gives.
+  // The last path of length() or follow() cut at vertices between fans (split_): its parts'
+  // routes and the vertices between them, which taut_route gives.
   bool split_ = false;
   PathRoute split_route_;
 };

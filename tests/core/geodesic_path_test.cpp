@@ -2,6 +2,7 @@
 // geodesics on rough terrain.
 #include "core/geodesic_path.hpp"
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <functional>
@@ -138,6 +139,14 @@ TEST_CASE("a path through a vertex where two parts of the mesh meet is straighte
       const double expected = cut ? dist3(pts[i], v) + dist3(v, pts[j]) : dist3(pts[i], pts[j]);
       CHECK(d[t] == Approx(expected).epsilon(1e-9));
       ++t;
+      if (!cut) continue;
+      // A route through the vertex, walked by its bends (along) and by its faces (follow),
+      // cut there too; follow's route is the two segments.
+      const std::vector<std::array<double, 2>> through{{50.0, 50.0}};
+      CHECK(s.along(pts[i], through, pts[j]) == Approx(expected).epsilon(1e-9));
+      core::PathRoute route;
+      CHECK(s.follow(pts[i], through, pts[j], &route) == Approx(expected).epsilon(1e-9));
+      CHECK(std::find(route.taut.begin(), route.taut.end(), through[0]) != route.taut.end());
     }
   }
   CHECK(across > 50);
