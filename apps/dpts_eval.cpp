@@ -487,9 +487,11 @@ int run(const Options& o) {
   request.snap_m = o.snap_m;
   request.max_memory_mb = o.max_memory_mb;
   std::optional<io::AtomicOutputFile> error_map_out, hillshade_out;
+  // Which band of several is measured, as dpts-par says which it simplified: said once the
+  // measure is made (a failure before is its one line alone).
+  std::string bands_note;
   const std::unique_ptr<api::Evaluation> ev = api::load(request, [&](const io::Dem& dem) {
-    // Which band of several is measured, as dpts-par says which it simplified.
-    if (!dem.bands_note.empty() && !o.quiet) std::cerr << "dpts-eval: " << dem.bands_note << "\n";
+    bands_note = dem.bands_note;
     // Nor may an output overwrite any file of the DEM's dataset (an ENVI .hdr, a VRT's
     // source, the zip behind /vsizip/).
     for (const auto& [flag, path] :
@@ -535,6 +537,7 @@ int run(const Options& o) {
     ev->options.keep_pairs = true;
   }
   api::measure(*ev, request, progress);
+  if (!bands_note.empty() && !o.quiet) std::cerr << "dpts-eval: " << bands_note << "\n";
   const par::EvalResult& r = ev->result;
   const double secs =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

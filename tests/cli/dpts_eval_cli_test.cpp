@@ -147,6 +147,11 @@ TEST_CASE("dpts-eval measures the band dpts-par simplified (--band), and names t
   const auto none = test::run(kEval, {"--dem", dem, "--mesh", mesh, "--band", "3"});
   CHECK(none.exit_code == 1);
   CHECK(none.err == "dpts-eval: error: " + dem + ": has 2 bands; there is no band 3\n");
+  // The note waits for the measure: a failure before it is one line alone.
+  const std::string missing = (dir / "missing.ply").string();
+  const auto no_mesh = test::run(kEval, {"--dem", dem, "--mesh", missing});
+  CHECK(no_mesh.exit_code == 1);
+  CHECK(no_mesh.err == "dpts-eval: error: " + missing + ": no such file\n");
 }
 
 TEST_CASE("dpts-eval reports every figure in one JSON line", "[cli][eval]") {
