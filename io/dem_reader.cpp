@@ -477,7 +477,26 @@ void set_output_crs(GDALDataset& ds, const std::string& path, const DemReadOptio
   } else if (has_crs) {
     dst = src;
   } else {
-    dem.notes.push_back("warning: " + path + " has no CRS; treating x, y as metres");
+    // note: a geographic DEM that lost its CRS (an old ASCII grid, a stripped GeoTIFF) reads
+    // as a cliff of metre-high walls over cells of a thousandth: the warning says so where
+    // the cells are small and the corners all lie within longitudes and latitudes.
+    std::string degrees;
+    const double xs[4] = {gt[0], gt[0] + width * gt[1], gt[0] + height * gt[2],
+                          gt[0] + width * gt[1] + height * gt[2]};
+    const double ys[4] = {gt[3], gt[3] + width * gt[4], gt[3] + height * gt[5],
+                          gt[3] + width * gt[4] + height * gt[5]};
+    bool lon_lat = std::hypot(gt[1], gt[4]) <= 0.1 && std::hypot(gt[2], gt[5]) <= 0.1;
+    for (int k = 0; k < 4; ++k)
+      lon_lat = lon_lat && std::fabs(xs[k]) <= 360 && std::fabs(ys[k]) <= 90;
+    if (lon_lat) {
+      char cells[200];
+      std::snprintf(cells, sizeof cells,
+                    " (cells of %.3g x %.3g, every corner within longitudes and latitudes: if "
+                    "they are degrees, give it its CRS, e.g. gdal_edit.py -a_srs EPSG:4326)",
+                    std::hypot(gt[1], gt[4]), std::hypot(gt[2], gt[5]));
+      degrees = cells;
+    }
+    dem.notes.push_back("warning: " + path + " has no CRS; treating x, y as metres" + degrees);
   }
   double jac[2][2] = {{gt[1], gt[2]}, {gt[4], gt[5]}};
   if (has_crs) {

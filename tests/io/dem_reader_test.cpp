@@ -77,7 +77,14 @@ TEST_CASE("a DEM without CRS is read as metres with a warning", "[io][dem]") {
   CHECK(dem.output_wkt.empty());
   REQUIRE(dem.notes.size() == 1);
   CHECK(dem.notes[0].find("no CRS") != std::string::npos);
+  CHECK(dem.notes[0].find("degrees") == std::string::npos);
   CHECK(dem.frame.metres_per_unit == 2.0);
+  // Cells of 3 arc-seconds at 42 N, 1.5 E, without their CRS: maybe degrees, said.
+  const double arc = 1.0 / 1200;
+  test::write_geotiff(dir / "lonlat.tif", g, {1.5, arc, 0, 42.0, 0, -arc}, "");
+  const io::Dem lonlat = io::read_dem((dir / "lonlat.tif").string(), {}, nullptr);
+  REQUIRE(lonlat.notes.size() == 1);
+  CHECK(lonlat.notes[0].find("if they are degrees, give it its CRS") != std::string::npos);
 }
 
 TEST_CASE("bad rasters are refused naming the file", "[io][dem]") {
