@@ -307,18 +307,16 @@ int simplify_and_write(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinte
   // note: the input's notes (its CRS projected, scale and offset, bands) are printed once its
   // cells are counted: the piece engines learn only then that a band is all no-data, and a
   // refused input gets its one line alone.
-  std::vector<std::string> notes;
-  bool notes_due = false;
+  std::vector<std::string> notes;  // those not printed yet
   auto flush_notes = [&] {
-    if (!notes_due) return;
-    notes_due = false;
+    if (notes.empty()) return;
     printer.finish();
     print_notes(notes, o);
+    notes.clear();
   };
   r.on_input = [&](const io::DemInfo& dem) {
     if (!g_report.path.empty()) g_report.input_json = cli::input_json(dem, 0, 0);
     notes = dem.notes;
-    notes_due = true;
     out.emplace(o.output);  // the input is valid: now claim the output (fails early)
   };
   const core::Progress noted = [&](double f, std::string_view stage) {

@@ -653,7 +653,6 @@ double PathStraightener::follow(const SurfacePoint& source,
   SurfacePoint from = source;
   PathRoute cut;
   double total = 0;
-  bool was_cut = false;
   // From f to face g around their common corner v (the side with fewer faces between).
   auto around = [&](std::uint32_t v, std::uint32_t g) {
     if (g == f) return true;
@@ -664,7 +663,6 @@ double PathStraightener::follow(const SurfacePoint& source,
       if (len < 0) return false;
       total += len;
       append_part(cut, &at);
-      was_cut = true;
       from = at;
       from.face = g;
       strip_.clear();
@@ -740,7 +738,7 @@ double PathStraightener::follow(const SurfacePoint& source,
   if (strip_.front() != from.face || strip_.back() != target.face) return failed();
   const double len = pull_taut(from, target);
   if (len < 0) return len;
-  if (was_cut) {
+  if (!cut.taut.empty()) {  // cut at a vertex (its point ends each part but the last)
     append_part(cut, nullptr);
     split_route_ = std::move(cut);
     split_ = true;

@@ -18,6 +18,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/errors.hpp"
@@ -253,28 +254,35 @@ double height_unit_metres(std::string unit) {
   std::transform(unit.begin(), unit.end(), unit.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   const std::string first = unit.substr(0, unit.find_first_of(" _("));
-  if (first.empty() || first == "m" || first == "metre" || first == "metres" || first == "meter" ||
-      first == "meters") {
-    return 1.0;
+  for (const char* m : {"", "m", "metre", "metres", "meter", "meters"}) {
+    if (first == m) return 1.0;
   }
-  if (unit == "ft" || unit == "foot" || unit == "feet" || unit == "international foot") {
-    return 0.3048;
-  }
-  if (unit == "us survey foot" || unit == "us-ft" || unit == "ftus" || unit == "us_survey_foot") {
-    return 1200.0 / 3937.0;
-  }
-  if (unit == "km" || unit == "kilometre" || unit == "kilometres" || unit == "kilometer" ||
-      unit == "kilometers") {
-    return 1000.0;
-  }
-  if (unit == "dm") return 0.1;
-  if (unit == "cm" || unit == "centimetre" || unit == "centimetres" || unit == "centimeter" ||
-      unit == "centimeters") {
-    return 0.01;
-  }
-  if (unit == "mm" || unit == "millimetre" || unit == "millimetres" || unit == "millimeter" ||
-      unit == "millimeters") {
-    return 0.001;
+  static constexpr std::pair<const char*, double> kUnits[] = {{"ft", 0.3048},
+                                                              {"foot", 0.3048},
+                                                              {"feet", 0.3048},
+                                                              {"international foot", 0.3048},
+                                                              {"us survey foot", 1200.0 / 3937.0},
+                                                              {"us-ft", 1200.0 / 3937.0},
+                                                              {"ftus", 1200.0 / 3937.0},
+                                                              {"us_survey_foot", 1200.0 / 3937.0},
+                                                              {"km", 1000.0},
+                                                              {"kilometre", 1000.0},
+                                                              {"kilometres", 1000.0},
+                                                              {"kilometer", 1000.0},
+                                                              {"kilometers", 1000.0},
+                                                              {"dm", 0.1},
+                                                              {"cm", 0.01},
+                                                              {"centimetre", 0.01},
+                                                              {"centimetres", 0.01},
+                                                              {"centimeter", 0.01},
+                                                              {"centimeters", 0.01},
+                                                              {"mm", 0.001},
+                                                              {"millimetre", 0.001},
+                                                              {"millimetres", 0.001},
+                                                              {"millimeter", 0.001},
+                                                              {"millimeters", 0.001}};
+  for (const auto& [name, metres] : kUnits) {
+    if (unit == name) return metres;
   }
   return 0.0;  // not known
 }

@@ -224,7 +224,7 @@ std::string absurd_heights_note(const DemInfo& dem, std::size_t count);
 
 // The message for a DEM whose band has no valid cell, naming the file and the band, and how
 // many cells held heights beyond +-1e7 (read as no-data), if any.
-std::string all_nodata_message(const DemInfo& dem, std::size_t absurd_cells = 0);
+std::string all_nodata_message(const DemInfo& dem, std::size_t absurd_cells);
 
 // Reads the band of `path` (options.band), at most core::kMaxGridCells cells. No-data cells, NaN,
 // infinite and absurd heights become NaN. Checks the raster before reading it and throws InputError
