@@ -55,6 +55,8 @@ MeshCheck check_mesh(const std::vector<double>& xy,
     const std::size_t uses = j - i;
     if (uses == 1) {
       ++result.boundary_edges;
+      const std::uint64_t p = edges[i].first >> 32, q = edges[i].first & 0xFFFFFFFFu;
+      result.boundary_length += std::hypot(xy[2 * q] - xy[2 * p], xy[2 * q + 1] - xy[2 * p + 1]);
     } else if (uses > 2 || sum != 0) {
       ++result.bad_edges;
     }

@@ -16,6 +16,9 @@ struct MeshCheck {
   std::size_t clockwise_or_flat = 0;  // faces not strictly counter-clockwise in x, y
   std::size_t bad_edges = 0;          // edges used twice in one direction or by > 2 faces
   std::size_t boundary_edges = 0;     // edges used by exactly one face
+  // Their summed lengths in x, y: the outline's, where the faces cover a footprint without
+  // a crack (a T-junction, or a seam whose two sides were not joined, adds its length twice).
+  double boundary_length = 0.0;
   double area = 0.0;                  // sum of signed face areas in x, y
 };
 
