@@ -90,7 +90,9 @@ std::unique_ptr<Evaluation> load(const EvalRequest& request,
   // Validity of T' over the DEM.
   const std::vector<double> s_xy = core::xy_of(s.xyz);
   e->validity = core::check_mesh(s_xy, s.faces);
-  e->footprint_area = core::mesh_area(core::xy_of(t.xyz), t.faces);
+  const core::MeshCheck footprint = core::check_mesh(core::xy_of(t.xyz), t.faces);
+  e->footprint_area = footprint.area;
+  e->footprint_outline = footprint.boundary_length;
   const double tol = dem.to_output ? 0.01 : 1e-6;  // cells; reprojection rounding
   e->over_nodata = core::faces_over_nodata(dem.grid, dem.grid_xy(s_xy), s.faces, tol);
 
@@ -203,6 +205,7 @@ std::string Evaluation::json(const EvalRequest& request, int threads, double sec
       .add("bad_edges", validity.bad_edges)
       .add("faces_over_nodata", over_nodata)
       .add("coverage", validity.area / footprint_area)
+      .add("boundary_ratio", validity.boundary_length / footprint_outline)
       .add("cells_outside_mesh", uncovered)
       .add("threads", threads)
       .add("dem", request.dem)

@@ -31,6 +31,7 @@ struct Evaluation {
   std::size_t merged = 0;    // mesh vertices welded into an earlier one
   core::MeshCheck validity;  // of the mesh
   double footprint_area = 0;
+  double footprint_outline = 0;  // the length of T's boundary (MeshCheck::boundary_length)
   std::size_t over_nodata = 0;  // mesh faces over no-data cells
   double snap = 0;              // metres
   double rmse = 0, vmax = 0;    // vertical error at T's vertices inside the mesh

@@ -76,8 +76,9 @@ the shorter kept: under 0.01 % above exact on average on real DEMs at the defaul
 the measure within 1.4 % of the exact one (--steiner keeps the paper's Steiner distances,
 0.7 % above).
 The result is the mean over independent sets. Also reports the mesh's validity over
-the DEM (orientation, coverage, faces over no-data) and its vertical error at every valid
-cell centre.
+the DEM (orientation, coverage, faces over no-data, its boundary's length against the
+footprint's outline: longer where a seam inside was left open) and its vertical error at
+every valid cell centre.
 
   --dem DEM          the original DEM (any raster GDAL reads)
   --band B           the DEM's band holding the heights (default 1), as given to dpts-par
@@ -378,8 +379,13 @@ void print_report(const Options& o, const dpts::api::Evaluation& ev, double secs
   std::printf(
       "validity         %zu faces not counter-clockwise, %zu bad edges, %zu faces over no-data\n",
       ev.validity.clockwise_or_flat, ev.validity.bad_edges, ev.over_nodata);
-  std::printf("coverage         mesh area / footprint area = %.9f\n",
-              ev.validity.area / ev.footprint_area);
+  std::printf(
+      "coverage         mesh area / footprint area = %.9f; mesh boundary / footprint outline = "
+      "%.6f%s\n",
+      ev.validity.area / ev.footprint_area, ev.validity.boundary_length / ev.footprint_outline,
+      ev.validity.boundary_length > 1.001 * ev.footprint_outline
+          ? " (longer: a crack or slit inside, or a moved outline)"
+          : "");
   std::printf(
       "vertical error   RMSE %.4f m, max %.4f m over %zu cell centres (%zu outside the mesh)\n",
       ev.rmse, ev.vmax, ev.measured, ev.uncovered);

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "core/mesh_check.hpp"
 #include "io/json.hpp"
 #include "io/ply.hpp"
 #include "test_support.hpp"
@@ -652,6 +653,58 @@ TEST_CASE("dpts-eval fails with the count of pairs a mesh in two parts does not 
   CHECK(r.err ==
         "dpts-eval: error: the mesh does not connect 4 of the 6 pairs of sample set 0 "
         "that T connects (is it in several parts, or slit?)\n");
+}
+
+TEST_CASE("dpts-eval reports a seam left open inside the mesh by its boundary's length",
+          "[cli][eval][robust]") {
+  Fixture fx;
+  // The DEM's own grid TIN, its faces right of x = 400155 m given their own copies of the
+  // four vertices there between y = 3799895 and 3799945, 1 mm higher (identical ones would be
+  // welded): a slit of 50 m, whose two sides cover the same area and still connect round it.
+  const auto full = (fx.dir / "full.ply").string();
+  REQUIRE(test::run(kPar, {"--quiet", "--keep", "100%", fx.dem, full}).exit_code == 0);
+  io::Mesh m = io::read_ply_file(full);
+  const double outline = core::check_mesh(core::xy_of(m.xyz), m.faces).boundary_length;
+  const std::size_t n = m.vertex_count();
+  std::vector<std::uint32_t> copy(n, 0);
+  for (std::uint32_t v = 0; v < n; ++v) {
+    const double x = m.xyz[3 * v], y = m.xyz[3 * v + 1];
+    if (x == 400155 && y > 3799895 && y < 3799945) {
+      copy[v] = static_cast<std::uint32_t>(m.vertex_count());
+      m.xyz.insert(m.xyz.end(), {x, y, m.xyz[3 * v + 2] + 1e-3});  // not welded
+    }
+  }
+  REQUIRE(m.vertex_count() == n + 4);
+  for (auto& f : m.faces) {
+    const double cx = (m.xyz[3 * f[0]] + m.xyz[3 * f[1]] + m.xyz[3 * f[2]]) / 3;
+    if (cx <= 400155) continue;
+    for (auto& v : f) v = copy[v] ? copy[v] : v;
+  }
+  const auto slit = (fx.dir / "slit.ply").string();
+  {
+    std::ofstream out(slit, std::ios::binary);
+    io::write_ply(out, m, io::PlyFormat::binary_little_endian);
+  }
+  const std::vector<std::string> args = {"--dem", fx.dem, "--points", "12", "--sets", "1",
+                                         "--json"};
+  auto run_on = [&](const std::string& mesh) {
+    std::vector<std::string> a = args;
+    a.insert(a.end(), {"--mesh", mesh});
+    return test::run(kEval, a);
+  };
+  const auto a = run_on(full), b = run_on(slit);
+  REQUIRE(a.exit_code == 0);
+  REQUIRE(b.exit_code == 0);
+  auto ratio = [&](const test::RunResult& r) {
+    return std::stod(io::json_field(last_line(r.out), "boundary_ratio").value_or("nan"));
+  };
+  CHECK(ratio(a) == Approx(1.0).epsilon(1e-12));
+  CHECK(ratio(b) == Approx((outline + 100) / outline).epsilon(1e-9));
+  CHECK(std::stod(io::json_field(last_line(b.out), "coverage").value_or("nan")) ==
+        Approx(1.0).epsilon(1e-12));
+  CHECK(io::json_field(last_line(b.out), "bad_edges") == "0");
+  CHECK(a.out.find("a crack or slit inside") == std::string::npos);
+  CHECK(b.out.find("(longer: a crack or slit inside, or a moved outline)") != std::string::npos);
 }
 
 TEST_CASE("dpts-eval welds a triangle soup and measures it as the indexed mesh",
