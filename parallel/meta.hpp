@@ -56,6 +56,8 @@ struct MetaStats {
   // qem: the merge's concurrent pre-merge (part of merge_s) and the collapses it made.
   double premerge_s = 0;
   std::size_t premerge_collapses = 0;
+  // qem: the groups its merge took the pieces in (one when their kept vertices fit a tile).
+  std::size_t merge_groups = 0;
   // Peak resident memory of the process (Linux VmHWM, kB; 0 elsewhere) just before the merge:
   // what the pieces needed, without the kept-vertex triangulation.
   std::size_t peak_rss_before_merge_kb = 0;

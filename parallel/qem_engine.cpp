@@ -958,6 +958,7 @@ core::TriMesh simplify_qem(const core::RasterSource& dem, const QemEngineOptions
   // 2 and 3, a group of pieces at a time: simplify its pieces concurrently, seams locked; then
   // stitch them to what is open and collapse on.
   const std::vector<std::size_t> groups = qem_groups(pieces, qem_fraction(st), options);
+  st.merge_groups = groups.size() - 1;
   QemSweep sweep(dem, options, pieces, st);
   std::vector<QemPieceMesh> outputs(pieces.size());
   const double all = static_cast<double>(std::max<std::size_t>(1, pieces.size()));
@@ -1055,6 +1056,7 @@ core::TriMesh merge_qem(const core::RasterSource& dem, const QemEngineOptions& o
   for (const auto& o : outputs) st.kept_bytes += o.bytes();
   const auto t0 = std::chrono::steady_clock::now();
   const std::vector<std::size_t> groups = qem_groups(pieces, qem_fraction(st), options);
+  st.merge_groups = groups.size() - 1;
   QemSweep sweep(dem, options, pieces, st);
   for (std::size_t g = 0; g + 1 < groups.size(); ++g) {
     if (progress && !progress(static_cast<double>(g) / (groups.size() - 1), "merge")) {

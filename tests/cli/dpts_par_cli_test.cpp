@@ -914,3 +914,33 @@ TEST_CASE(
   }
   CHECK(!std::filesystem::exists(out));
 }
+
+TEST_CASE("a kept count over the target says when qem merged the pieces in parts",
+          "[cli][robust]") {
+  test::TempDir dir;
+  const auto dem = (dir / "holes.tif").string(), out = (dir / "out.ply").string();
+  // Voids at every third cell of every third row: their bends hold half the vertices.
+  test::write_geotiff(dem,
+                      test::make_grid(300, 300,
+                                      [](int c, int r) {
+                                        if (c % 3 == 1 && r % 3 == 1) {
+                                          return std::numeric_limits<double>::quiet_NaN();
+                                        }
+                                        return 200.0 + 30.0 * std::sin(0.3 * c) + 2.0 * r;
+                                      }),
+                      {400000, 10, 0, 3800000, 0, -10}, utm_wkt());
+  const std::string outline =
+      "the outline of the valid data (its corners and the bends round voids) needs them";
+  // One merge (the default tile): the outline alone is named.
+  const auto one = test::run(kExe, {"--quiet", dem, out});
+  REQUIRE(one.exit_code == 0);
+  CHECK(one.err.rfind("dpts-par: warning: kept ", 0) == 0);
+  CHECK(one.err.find(", not 8000: " + outline + "\n") != std::string::npos);
+  // A 1 MB tile: the merge takes the pieces in parts, each held to its share.
+  const auto parts = test::run(kExe, {"--quiet", "--tile-mb", "1", dem, out});
+  REQUIRE(parts.exit_code == 0);
+  CHECK(parts.err.find(", not 8000: " + outline +
+                       "; the merge took the pieces in 8 parts, each held to its share of the "
+                       "target (--tile-mb sets how many)\n") != std::string::npos);
+  CHECK(std::count(parts.err.begin(), parts.err.end(), '\n') == 1);
+}
