@@ -189,6 +189,7 @@ void print_pieces(const dpts::par::MetaStats& stats, bool values) {
   std::fprintf(stderr,
                DPTS_PROG ": stages: count %.2f s, values %.2f s, simplify %.2f s, merge %.2f s",
                stats.count_s, stats.values_s, stats.simplify_s, stats.merge_s);
+  if (stats.merge_groups > 1) std::fprintf(stderr, " (in %zu groups)", stats.merge_groups);
   if (stats.premerge_collapses > 0) {
     std::fprintf(stderr, " (pre-merge %.2f s, %zu collapses)", stats.premerge_s,
                  stats.premerge_collapses);

@@ -943,4 +943,8 @@ TEST_CASE("a kept count over the target says when qem merged the pieces in parts
                        "; the merge took the pieces in 8 parts, each held to its share of the "
                        "target (--tile-mb sets how many)\n") != std::string::npos);
   CHECK(std::count(parts.err.begin(), parts.err.end(), '\n') == 1);
+  // --verbose counts them beside the merge's time.
+  const auto verbose = test::run(kExe, {"--verbose", "--tile-mb", "1", dem, out});
+  REQUIRE(verbose.exit_code == 0);
+  CHECK(verbose.err.find(" s (in 8 groups)") != std::string::npos);
 }
