@@ -404,7 +404,7 @@ class LaterWindows {
     for (std::uint64_t dr = 0; dr < 2; ++dr) {
       for (std::uint64_t dc = 0; dc < 2; ++dc) {
         if (dc > c || dr > r) continue;
-        const std::int64_t o = owner_[((r - dr) / block_) * bx_ + (c - dc) / block_];
+        const std::int64_t o = owner(c - dc, r - dr);
         if (o >= 0 && (static_cast<std::size_t>(o) < from || static_cast<std::size_t>(o) >= end))
           return true;
       }
@@ -414,11 +414,16 @@ class LaterWindows {
   bool later(std::uint64_t cell, std::size_t from) const { return outside(cell, 0, from); }
   // Whether the cell belongs to a piece at or after `from`.
   bool owned_later(std::uint64_t cell, std::size_t from) const {
-    const std::int64_t o = owner_[(cell / width_ / block_) * bx_ + (cell % width_) / block_];
+    const std::int64_t o = owner(cell % width_, cell / width_);
     return o >= 0 && static_cast<std::size_t>(o) >= from;
   }
 
  private:
+  // The piece owning the cell at column c, row r (-1: none).
+  std::int64_t owner(std::uint64_t c, std::uint64_t r) const {
+    return owner_[(r / block_) * bx_ + c / block_];
+  }
+
   std::uint64_t block_;
   std::uint64_t bx_;
   std::uint64_t width_;
@@ -489,7 +494,7 @@ class QemSweep {
                    borrowed;
     const std::size_t dropped = written_ - held;
     const std::size_t keep = want > dropped ? want - dropped : 0;
-    core::QemResult r = collapse(std::move(locked), boundary + borrowed + held > 0, keep, progress);
+    core::QemResult r = collapse(std::move(locked), keep, progress);
     // Per vertex data through the collapse.
     std::vector<std::uint64_t> cell(r.source.size());
     std::vector<char> seam(r.source.size());
@@ -702,10 +707,12 @@ class QemSweep {
   }
 
   // What is open collapsed to `keep` vertices, the locked ones (if any) never moving.
-  core::QemResult collapse(std::vector<char> locked, bool any_locked, std::size_t keep,
+  // note: whether any is locked is read off `locked` itself, not passed beside it: a count
+  // kept apart once missed the later pieces' cells and left every seam between groups open.
+  core::QemResult collapse(std::vector<char> locked, std::size_t keep,
                            const core::Progress& progress) {
     core::QemOptions qo;
-    if (any_locked) qo.locked = std::move(locked);
+    if (std::find(locked.begin(), locked.end(), 1) != locked.end()) qo.locked = std::move(locked);
     qo.quadrics = std::move(quadrics_);
     qo.plane_xy = std::move(plane_xy_);
     rules(qo, &cell_);
