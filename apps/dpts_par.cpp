@@ -186,6 +186,19 @@ void print_pieces(const dpts::par::MetaStats& stats, bool values) {
                longest, sum / static_cast<double>(std::max<std::size_t>(1, stats.pieces.size())),
                static_cast<double>(stats.peak_rss_before_merge_kb) / 1024.0,
                static_cast<double>(stats.kept_bytes) / (1 << 20));
+  if (stats.pilot_pieces > 0) {
+    if (stats.piece_cost_bound >= 0) {
+      std::fprintf(stderr,
+                   DPTS_PROG ": pilot: %zu pieces, %.2f s: the pieces collapse while a collapse "
+                             "costs at most %.6g\n",
+                   stats.pilot_pieces, stats.pilot_s, stats.piece_cost_bound);
+    } else {
+      std::fprintf(stderr,
+                   DPTS_PROG ": pilot: %zu pieces, %.2f s: no cost bound (each piece keeps its "
+                             "share by size)\n",
+                   stats.pilot_pieces, stats.pilot_s);
+    }
+  }
   std::fprintf(stderr,
                DPTS_PROG ": stages: count %.2f s, values %.2f s, simplify %.2f s, merge %.2f s",
                stats.count_s, stats.values_s, stats.simplify_s, stats.merge_s);

@@ -287,6 +287,7 @@ class Collapser {
            double max_cost = std::numeric_limits<double>::infinity()) {
     prepare(keep);
     const bool bounded = max_cost < std::numeric_limits<double>::infinity();
+    last_cost_ = 0;
     const std::size_t start = alive_;
     const double span = start > keep ? static_cast<double>(start - keep) : 1.0;
     while (alive_ > keep && !heap_.empty()) {
@@ -331,6 +332,7 @@ class Collapser {
         continue;
       }
       collapse(p);
+      last_cost_ = std::max(last_cost_, p.cost);
       ++r.collapses;
       if (r.collapses % 4096 == 0 && progress_ &&
           !progress_(static_cast<double>(r.collapses) / span, "simplify")) {
@@ -338,6 +340,9 @@ class Collapser {
       }
     }
   }
+
+  // The most a collapse of the last run() cost (0: none made).
+  double last_cost() const { return last_cost_; }
 
   // The output (compacted), once run is done: the queue and the connectivity go first, so
   // that the output never sits beside them (the peak of the piece engine's merge).
@@ -865,20 +870,22 @@ class Collapser {
   std::vector<std::uint32_t> mark_;
   std::uint32_t ring_mark_ = 0;
   std::uint32_t collapses_ = 0;
+  double last_cost_ = 0;
   bool prepared_ = false;
 };
 
 }  // namespace
 
 struct QemCollapse::Impl {
-  Impl(TriMesh&& mesh, QemOptions&& options) : o(std::move(options)), c(std::move(mesh), o, none) {}
+  Impl(TriMesh&& mesh, QemOptions&& options, Progress&& progress)
+      : o(std::move(options)), p(std::move(progress)), c(std::move(mesh), o, p) {}
   QemOptions o;
-  const Progress none;  // the collapser keeps references to both
+  const Progress p;  // the collapser keeps references to both
   Collapser c;
 };
 
-QemCollapse::QemCollapse(TriMesh mesh, QemOptions options)
-    : impl_(std::make_unique<Impl>(std::move(mesh), std::move(options))) {
+QemCollapse::QemCollapse(TriMesh mesh, QemOptions options, Progress progress)
+    : impl_(std::make_unique<Impl>(std::move(mesh), std::move(options), std::move(progress))) {
   impl_->c.prepare();
   r_.input_vertices = impl_->c.alive();
 }
@@ -887,6 +894,8 @@ QemCollapse::QemCollapse(QemCollapse&&) noexcept = default;
 QemCollapse& QemCollapse::operator=(QemCollapse&&) noexcept = default;
 
 std::size_t QemCollapse::vertices() const { return impl_->c.alive(); }
+
+double QemCollapse::max_cost_made() const { return impl_->c.last_cost(); }
 
 void QemCollapse::queued_costs(std::vector<float>& out) const { impl_->c.queued_costs(out); }
 

@@ -110,17 +110,21 @@ struct QemResult {
 QemResult qem_simplify(TriMesh mesh, std::size_t keep, QemOptions options = {},
                        const Progress& progress = nullptr);
 
-// qem_simplify in two steps, for a caller that bounds the collapse's cost from several meshes'
-// queues (the piece engine's pre-merge): the mesh prepared with every edge's first cost
-// queued, then collapsed. No progress; the same rules and errors as qem_simplify.
+// qem_simplify in steps, for a caller that bounds the collapse's cost from several meshes'
+// queues (the piece engine's pre-merge) or by a cost found beforehand (its pieces): the mesh
+// prepared with every edge's first cost queued, then collapsed. Progress as qem_simplify's,
+// each collapse() call counting from 0 to 1; the same rules and errors.
 class QemCollapse {
  public:
-  QemCollapse(TriMesh mesh, QemOptions options);
+  QemCollapse(TriMesh mesh, QemOptions options, Progress progress = nullptr);
   ~QemCollapse();
   QemCollapse(QemCollapse&&) noexcept;
   QemCollapse& operator=(QemCollapse&&) noexcept;
   // Vertices left (at first: those of the mesh on some face).
   std::size_t vertices() const;
+  // The most a collapse of the last collapse() call cost (0: it made none). Costs rise as
+  // collapses go on, but not strictly (a collapse may lower its neighbours').
+  double max_cost_made() const;
   // The queued edges' costs, lower bounds of what each collapse would cost now, appended.
   void queued_costs(std::vector<float>& out) const;
   // Collapses in cost order while more than keep vertices are left and the cheapest collapse

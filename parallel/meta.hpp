@@ -58,6 +58,13 @@ struct MetaStats {
   std::size_t premerge_collapses = 0;
   // qem: the groups its merge took the pieces in (one when their kept vertices fit a tile).
   std::size_t merge_groups = 0;
+  // qem: its pilot (qem_engine.hpp): the pieces it simplified, its time, the cost bound it
+  // found for the pieces' collapses (-1: none; the pieces keep their shares by size) and
+  // the vertices a piece keeps at that bound per surface vertex, on average over the pilot's.
+  std::size_t pilot_pieces = 0;
+  double pilot_s = 0;
+  double piece_cost_bound = -1;
+  double pilot_kept_per_vertex = 0;
   // Peak resident memory of the process (Linux VmHWM, kB; 0 elsewhere) just before the merge:
   // what the pieces needed, without the kept-vertex triangulation.
   std::size_t peak_rss_before_merge_kb = 0;

@@ -13,6 +13,7 @@
 #include <cstring>
 #include <exception>
 #include <functional>
+#include <limits>
 #include <list>
 #include <mutex>
 #include <optional>
@@ -233,9 +234,34 @@ void take_collapsed(core::QemResult&& r, const std::vector<char>& seam, CellOf&&
   }
 }
 
+// A piece's collapse (the pilot, qem_engine.hpp): collapsed unbounded to kPieceMost x its share
+// of the target (its vertices less its seams', times the target's fraction), then on while a
+// collapse costs at most the pilot's bound, down to kPieceLeast x its share at the least.
+// note: a piece keeps what the surface needs there (San Gabriel: 0.7 to 1.5 x its share by
+// size; kilauea_utm5's sea, all outline round its salt-and-pepper voids: up to 5 x, forced),
+// where a count alone made a piece whose voids' outlines filled its count collapse all else it
+// could, at any cost: kilauea's coastal cliffs 171 m off (vertical RMSE 5.36 m, 0.64 so).
+constexpr double kPieceMost = 8.0, kPieceLeast = 0.25;
+
+// A pilot piece's collapse from kPieceMost x its share down to kPieceLeast x, in steps: the
+// vertices left after each, the most any collapse after the first step cost by then, and its
+// counts at kPieceMost x, kPieceLeast x and slack x its share.
+struct PilotCurve {
+  std::vector<std::size_t> left;
+  std::vector<double> cost;
+  std::size_t most = 0, least = 0, keep = 0, vertices = 0;
+  // What the piece keeps with collapses past `most` bounded by `bound`.
+  std::size_t kept_at(double bound) const {
+    std::size_t k = most;
+    for (std::size_t i = 0; i < left.size() && cost[i] <= bound; ++i) k = left[i];
+    return std::max(k, least);
+  }
+};
+
 QemPieceMesh simplify_piece(const core::RasterSource& dem, const Positions& positions,
-                            const core::Piece& p, double fraction, const QemEngineOptions& options,
-                            PieceReport& report, const core::Progress& progress) {
+                            const core::Piece& p, double fraction, double cost_bound,
+                            const QemEngineOptions& options, PieceReport& report,
+                            const core::Progress& progress, PilotCurve* curve = nullptr) {
   // The piece's cells and one more column and row (the next pieces' first): the grid squares
   // whose top-left corner is the piece's.
   const int wc0 = p.col0, wr0 = p.row0;
@@ -288,9 +314,13 @@ QemPieceMesh simplify_piece(const core::RasterSource& dem, const Positions& posi
     };
   }
   const std::size_t n = tin.cells.size();
-  const std::size_t keep = std::min<std::size_t>(
-      n, locked + static_cast<std::size_t>(
-                      std::ceil(options.slack * fraction * static_cast<double>(n - locked))));
+  // s x the piece's share of the target, and its seams.
+  auto share = [&](double s) {
+    return std::min<std::size_t>(
+        n, locked + static_cast<std::size_t>(
+                        std::ceil(s * fraction * static_cast<double>(n - locked))));
+  };
+  const std::size_t keep = share(options.slack);
   std::optional<VerticalBound> bound;
   if (options.max_error > 0) {
     // The window holds every cell the piece's triangles cover.
@@ -303,7 +333,34 @@ QemPieceMesh simplify_piece(const core::RasterSource& dem, const Positions& posi
     grid = {};
   }
   const std::vector<char> seam = qo.locked;
-  core::QemResult r = core::qem_simplify(std::move(mesh), keep, std::move(qo), progress);
+  constexpr double kAny = std::numeric_limits<double>::infinity();
+  core::QemResult r;
+  if (curve) {
+    core::QemCollapse c(std::move(mesh), std::move(qo), progress);
+    curve->most = share(kPieceMost);
+    curve->least = share(kPieceLeast);
+    curve->keep = keep;
+    curve->vertices = n;
+    c.collapse(curve->most, kAny);
+    double most = 0;
+    for (std::size_t left = curve->most; left > curve->least;) {
+      left = std::max(curve->least, left - std::max<std::size_t>(1, left / 20));
+      c.collapse(left, kAny);
+      most = std::max(most, c.max_cost_made());
+      curve->left.push_back(c.vertices());
+      curve->cost.push_back(most);
+    }
+    return out;
+  }
+  if (cost_bound >= 0) {
+    core::QemCollapse c(std::move(mesh), std::move(qo), progress);
+    c.collapse(share(kPieceMost), kAny);
+    c.collapse(share(kPieceLeast), cost_bound);
+    r = c.result();
+    if (progress && !progress(1.0, "simplify")) throw Cancelled();
+  } else {
+    r = core::qem_simplify(std::move(mesh), keep, std::move(qo), progress);
+  }
   grid = {};
   take_collapsed(
       std::move(r), seam,
@@ -443,7 +500,13 @@ class QemSweep {
         positions_(dem),
         later_(pieces, st.block, dem.width(), dem.height()),
         st_(st) {
-    for (const core::Piece& p : pieces) total_ += static_cast<double>(p.vertices);
+    // Each piece's weight in the target's shares: its surface vertices, or with the pilot's
+    // bound the vertices it kept (estimated from the pilot's until it is merged).
+    weight_.resize(pieces.size());
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+      weight_[i] = static_cast<double>(pieces[i].vertices) *
+                   (st.piece_cost_bound >= 0 ? st.pilot_kept_per_vertex : 1.0);
+    }
     if (options.max_error > 0) {
       bound_.emplace(dem, options.max_error);
       cells_.emplace(dem, options.tile_bytes);
@@ -455,7 +518,16 @@ class QemSweep {
   // of it when no piece follows).
   void add(std::vector<QemPieceMesh>& outputs, const std::vector<core::Piece>& pieces,
            std::size_t first, std::size_t end, const core::Progress& progress) {
-    for (std::size_t i = first; i < end; ++i) done_ += static_cast<double>(pieces[i].vertices);
+    // note: the weights of the pieces merged so far are theirs, the later ones' estimates, here
+    // and under dpts-mpi alike (where every piece is in before the first group's merge).
+    if (st_.piece_cost_bound >= 0) {
+      for (std::size_t i = first; i < end; ++i)
+        weight_[i] = static_cast<double>(outputs[i].cell.size());
+    }
+    done_ = 0;
+    total_ = 0;
+    for (std::size_t i = 0; i < weight_.size(); ++i) (i < end ? done_ : total_) += weight_[i];
+    total_ += done_;
     const bool last = end == pieces.size();
     if (first == 0 && last && !bound_) {
       const auto t0 = std::chrono::steady_clock::now();
@@ -593,8 +665,8 @@ class QemSweep {
   };
 
   // Pieces [from, end) (their outputs emptied) stitched into run u, its collapse prepared.
-  void build_run(Run& u, std::vector<QemPieceMesh>& outputs, const std::vector<core::Piece>& pieces,
-                 std::size_t from, std::size_t end) const {
+  void build_run(Run& u, std::vector<QemPieceMesh>& outputs, std::size_t from,
+                 std::size_t end) const {
     QemPieceMesh m;
     std::unordered_map<std::uint64_t, std::uint32_t> seam_vertex;
     // Sized once (as in stitch): growing by doubling copied and faulted in each array twice.
@@ -607,7 +679,7 @@ class QemSweep {
     m.seam.reserve(size.vertices);
     double vertices = 0;
     for (std::size_t i = from; i < end; ++i) {
-      vertices += static_cast<double>(pieces[i].vertices);
+      vertices += weight_[i];
       QemPieceMesh& o = outputs[i];
       append_stitched(
           o, seam_vertex, m.cell.size(), m.mesh.faces,
@@ -667,7 +739,7 @@ class QemSweep {
     if (runs < 2 || vertices < options_.premerge_vertices) return;
     std::vector<Run> run(runs);
     tbb::parallel_for(std::size_t{0}, runs, [&](std::size_t r) {
-      build_run(run[r], outputs, pieces, r * kRunPieces, std::min(n, (r + 1) * kRunPieces));
+      build_run(run[r], outputs, r * kRunPieces, std::min(n, (r + 1) * kRunPieces));
     });
     for (int round = 0; round < kPremergeRounds; ++round) {
       std::vector<float> costs;
@@ -853,7 +925,8 @@ class QemSweep {
   const Positions positions_;
   const LaterWindows later_;
   MetaStats& st_;
-  double total_ = 0, done_ = 0;  // surface vertices of all pieces, and of those merged
+  std::vector<double> weight_;   // per piece (see the constructor)
+  double total_ = 0, done_ = 0;  // the weights of all pieces, and of those merged
   std::optional<VerticalBound> bound_;
   const std::function<bool(std::uint64_t, std::uint64_t)> chord_ = dem_.outline_chord_test();
   std::optional<BlockCache> cells_;
@@ -905,11 +978,82 @@ std::vector<std::size_t> qem_groups(const std::vector<core::Piece>& pieces, doub
 // Pieces of DEMs up to 16 x this are as before.
 constexpr std::size_t kQemPieceVertices = 1 << 14;
 
+namespace {
+
+// note: the pilot's pieces: every kPilotEvery-th in k-d order (spread over the DEM), at least
+// kPilotLeast (all of a DEM of fewer). San Gabriel: 8 of 64 pieces.
+constexpr std::size_t kPilotEvery = 32, kPilotLeast = 8;
+
+// The pilot (qem_engine.hpp): a spread of the pieces simplified down to kPieceLeast x their
+// shares, each collapse's cost noted; the bound is the largest cost at which they would keep,
+// together, what their counts by size (slack x their shares) keep. Sets st's pilot fields.
+void run_pilot(const core::RasterSource& dem, const QemEngineOptions& options,
+               const std::vector<core::Piece>& pieces, const core::Progress& progress,
+               MetaStats& st) {
+  st.piece_cost_bound = -1;
+  if (options.max_error > 0 || pieces.empty()) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::size_t n = pieces.size();
+  const std::size_t m = std::min(n, std::max(kPilotLeast, (n + kPilotEvery - 1) / kPilotEvery));
+  std::vector<PilotCurve> curves(m);
+  std::vector<PieceReport> reports(m);
+  const double fraction = qem_fraction(st);
+  const Positions positions(dem);
+  SharedProgress shared(progress, m);
+  tbb::parallel_for(std::size_t{0}, m, [&](std::size_t j) {
+    shared.check();
+    const std::size_t i = (2 * j + 1) * n / (2 * m);
+    // Progress: the pilot's pieces done (stage "pilot"), asked within each too (a stop).
+    simplify_piece(dem, positions, pieces[i], fraction, -1, options, reports[j],
+                   [&](double, std::string_view) { return shared.update(j, 0.0, "pilot"); },
+                   &curves[j]);
+    shared.update(j, 1.0, "pilot");
+  });
+  shared.check();
+  // The bound: kept_at falls as it grows; the largest of the costs noted that keeps `want`.
+  std::size_t want = 0;
+  std::vector<double> costs;
+  for (const PilotCurve& c : curves) {
+    want += c.keep;
+    costs.insert(costs.end(), c.cost.begin(), c.cost.end());
+  }
+  std::sort(costs.begin(), costs.end());
+  costs.erase(std::unique(costs.begin(), costs.end()), costs.end());
+  auto kept = [&](double bound) {
+    std::size_t k = 0;
+    for (const PilotCurve& c : curves) k += c.vertices ? c.kept_at(bound) : 0;
+    return k;
+  };
+  // note: none where the least cost noted already keeps too few (near 100 %, or a flat DEM
+  // whose collapses all cost 0): the pieces keep their counts by size, as before the pilot.
+  std::size_t lo = 0, hi = costs.size();  // costs[< lo] keep enough; costs[>= hi] do not
+  while (lo < hi) {
+    const std::size_t mid = lo + (hi - lo) / 2;
+    if (kept(costs[mid]) >= want) {
+      lo = mid + 1;
+    } else {
+      hi = mid;
+    }
+  }
+  st.pilot_pieces = m;
+  if (lo > 0) {
+    st.piece_cost_bound = costs[lo - 1];
+    double vertices = 0;
+    for (const PilotCurve& c : curves) vertices += static_cast<double>(c.vertices);
+    st.pilot_kept_per_vertex =
+        static_cast<double>(kept(st.piece_cost_bound)) / std::max(1.0, vertices);
+  }
+  st.pilot_s = seconds_since(t0);
+}
+
+}  // namespace
+
 std::vector<core::Piece> plan_qem(const core::RasterSource& dem, const QemEngineOptions& options,
                                   const core::Progress& progress, MetaStats& st) {
   const auto bytes = options.tile_bytes;
   const std::vector<core::Piece> pieces =
       divide_dem(dem, options.keep, options.levels, bytes, 1, progress, st, kQemPieceVertices);
+  run_pilot(dem, options, pieces, progress, st);
   // The merge holds one group's kept vertices (and the open band before it), the next group's
   // pieces' outputs beside it (where there is a next group), and the output unless it goes to
   // a sink.
@@ -948,8 +1092,9 @@ void simplify_qem_pieces(const core::RasterSource& dem, const QemEngineOptions& 
                         const core::Progress piece_progress = [&](double fr, std::string_view) {
                           return shared.update(k, fr, "simplify");
                         };
-                        outputs[i] = simplify_piece(dem, positions, pieces[i], fraction, options,
-                                                    st.pieces[i], piece_progress);
+                        outputs[i] = simplify_piece(dem, positions, pieces[i], fraction,
+                                                    st.piece_cost_bound, options, st.pieces[i],
+                                                    piece_progress);
                         shared.update(k, 1.0, "simplify");
                       }
                     });

@@ -3,11 +3,17 @@
 //
 //  1. One streaming pass counts surface vertices per block; a k-d division cuts the raster
 //     into pieces that fit the tile budget (as for vp-meta).
+//     Then the pilot: a spread of the pieces (every 32nd in k-d order, at least 8) collapsed
+//     down to a quarter of their shares of the target, each collapse's cost noted, gives the
+//     cost bound at which they would keep, together, `slack` x their shares.
 //  2. oneTBB tasks read each piece's window (its cells and one more column and row, so that
 //     every grid square belongs to exactly one piece) through their own GDAL handles, build
 //     its grid TIN and collapse it with the seam vertices (those other windows share) locked,
-//     down to `slack` x its share of the target. The window is then freed: what a piece
-//     hands on is its kept vertices, their accumulated quadrics and its faces.
+//     while a collapse costs at most the pilot's bound (between a quarter and 8 x its share
+//     of the target): a rough piece keeps more than a flat one, as one collapse of the whole
+//     DEM would. (Without a bound, near 100 %, or with --max-error: down to `slack` x its
+//     share.) The window is then freed: what a piece hands on is its kept vertices, their
+//     accumulated quadrics and its faces.
 //  3. The merge stitches the pieces at their seam vertices (identical cells), sums those
 //     vertices' quadrics (so every vertex's quadric is what one whole-DEM run would have
 //     given), unlocks the seams and goes on collapsing to the target: the seams vanish, and
@@ -16,7 +22,8 @@
 //     concurrently, each run stitched at its own seams, below a cost bound the merge passes
 //     anyway (the pre-merge, qem_engine.cpp): the serial merge is left the rest.
 // The merge takes the pieces in groups (consecutive in k-d order) whose kept vertices fit the
-// tile budget: a DEM whose kept vertices all fit is one group, merged as above. Otherwise
+// tile budget (planned at `slack` x their shares: a group of rough pieces holds more): a DEM
+// whose kept vertices all fit is one group, merged as above. Otherwise
 // steps 2 and 3 run a group at a time, each group's merge beside the next group's pieces (so
 // that only the last group's merge is serial), and the memory the merge holds no longer grows
 // with the DEM (the output mesh going to options.sink): each group's pieces are simplified,
@@ -25,7 +32,8 @@
 // window shares locked. Then every vertex more than a few edges from those is final: it is written
 // to the output with the faces whose corners are all final, and leaves the merge. The band left
 // open lets the next group simplify the seam between them with the vertices around it; across
-// groups the budget follows the pieces' sizes, within one the cost order. With a vertical bound
+// groups the target is shared by what the pieces kept (the later ones' by the pilot's mean),
+// within one it follows the cost order. With a vertical bound
 // (--max-error) every new triangle is tested against the valid cell centres it covers: in a piece
 // from its window, in the merge from the DEM read again block by block through a cache of at most
 // one tile. Pieces are simplified independently and merged in k-d order, so the output does not
@@ -107,16 +115,17 @@ struct QemPieceMesh {
 
 // Runs the engine on band 1. The mesh is in the output CRS (heights in metres), faces
 // counter-clockwise; with options.sink it goes there, and the mesh returned is empty. stats gets
-// the counts, the pieces (value 0) and the stage times. Progress stages "count", "simplify",
-// "merge"; false stops with Cancelled.
+// the counts, the pieces (value 0) and the stage times. Progress stages "count", "pilot",
+// "simplify", "merge"; false stops with Cancelled.
 core::TriMesh simplify_qem(const core::RasterSource& dem, const QemEngineOptions& options,
                            const core::Progress& progress, MetaStats* stats = nullptr);
 
 // The engine in its three stages, for running the pieces elsewhere (dpts-mpi): every process
 // plans the same pieces, each simplifies its share, and one merges them all; the mesh is the
 // same bytes as simplify_qem's, which is these three in one process.
-// 1. The streaming count, the division and the memory check: the pieces, in k-d order; st
-// gets the counts and a report per piece.
+// 1. The streaming count, the division, the pilot (its pieces simplified again in stage 2:
+// every process runs it, to the same bound) and the memory check: the pieces, in k-d order;
+// st gets the counts, the pilot's bound and a report per piece.
 std::vector<core::Piece> plan_qem(const core::RasterSource& dem, const QemEngineOptions& options,
                                   const core::Progress& progress, MetaStats& st);
 // 2. Pieces `which` (indices into pieces) simplified concurrently into outputs[i] (outputs

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -27,16 +28,18 @@ const std::string kExe = DPTS_PAR_EXE;
 std::string utm_wkt() { return test::epsg_wkt(32611); }
 
 // A small real-looking DEM with a void, in a fresh folder.
+// A 30 x 20 grid of 10 m cells with a void.
+core::HeightGrid fixture_grid() {
+  return test::make_grid(30, 20, [](int c, int r) {
+    if (c > 10 && c < 14 && r > 5 && r < 9) return std::numeric_limits<double>::quiet_NaN();
+    return 500.0 + 40.0 * std::sin(c * 0.4) + 3.0 * r;
+  });
+}
+
 struct Fixture {
   test::TempDir dir;
   std::string dem = (dir / "dem.tif").string();
-  Fixture() {
-    const auto g = test::make_grid(30, 20, [](int c, int r) {
-      if (c > 10 && c < 14 && r > 5 && r < 9) return std::numeric_limits<double>::quiet_NaN();
-      return 500.0 + 40.0 * std::sin(c * 0.4) + 3.0 * r;
-    });
-    test::write_geotiff(dem, g, {400000, 10, 0, 3800000, 0, -10}, utm_wkt());
-  }
+  Fixture() { test::write_geotiff(dem, fixture_grid(), {400000, 10, 0, 3800000, 0, -10}, utm_wkt()); }
 };
 
 // A smooth DEM of side x side cells of 10 m in UTM 11N, written to `path`: work enough for a
@@ -136,12 +139,21 @@ TEST_CASE("OBJ, STL and GeoPackage outputs hold the PLY's mesh, by extension or 
     ++facets;
   }
   CHECK(facets == mesh.faces.size());
-  const auto r = test::run(kExe, {"--quiet", fx.dem, (fx.dir / "bin.stl").string()});
+  // Binary STL: on a grid 0.3 m off float32's (whose cells' centres at UTM eastings and
+  // northings float32 cannot hold; the fixture's it can), a warning.
+  const auto off = (fx.dir / "off.tif").string();
+  test::write_geotiff(off, fixture_grid(), {400000.3, 10, 0, 3800000.3, 0, -10}, utm_wkt());
+  const auto r = test::run(kExe, {"--quiet", off, (fx.dir / "bin.stl").string()});
   REQUIRE(r.exit_code == 0);
   CHECK(r.err.rfind("dpts-par: warning: " + (fx.dir / "bin.stl").string() +
                         ": binary STL holds float32: coordinates moved by up to ",
                     0) == 0);
-  CHECK(test::file_bytes(fx.dir / "bin.stl").size() == 84 + 50 * mesh.faces.size());
+  const std::string bin = test::file_bytes(fx.dir / "bin.stl");
+  REQUIRE(bin.size() >= 84);
+  std::uint32_t facets_bin = 0;
+  std::memcpy(&facets_bin, bin.data() + 80, 4);
+  CHECK(facets_bin > 10);
+  CHECK(bin.size() == 84 + 50 * std::size_t{facets_bin});
 
   // GeoPackage: a Polygon Z per face in the DEM's CRS, the layer named after the file.
   const auto gpkg = (fx.dir / "out.gpkg").string();
@@ -168,8 +180,8 @@ TEST_CASE("OBJ, STL and GeoPackage outputs hold the PLY's mesh, by extension or 
   CHECK(env.MinZ == lo);
   CHECK(env.MaxZ == hi);
   GDALClose(ds);
-  CHECK(fx.dir.files() == std::vector<std::string>{"bin.stl", "dem.tif", "out.gpkg", "out.ply",
-                                                   "out.stl", "out.txt"});
+  CHECK(fx.dir.files() == std::vector<std::string>{"bin.stl", "dem.tif", "off.tif", "out.gpkg",
+                                                   "out.ply", "out.stl", "out.txt"});
 }
 
 TEST_CASE("output bytes are identical for 1, 2 and 4 threads", "[cli][determinism]") {
@@ -204,6 +216,16 @@ TEST_CASE("dpts-par --verbose prints the pieces' values and budgets", "[cli][met
   CHECK(r.err.find("value   P2L%  budget") != std::string::npos);
   CHECK(r.err.find("stages: count") != std::string::npos);
   CHECK(r.err.find("-> 100 vertices") != std::string::npos);
+  CHECK(r.err.find("pilot:") == std::string::npos);
+  // qem: the pilot's pieces and the cost bound it found for the pieces' collapses.
+  const auto q = test::run(kExe, {"--verbose", "--vertices", "100", fx.dem, out});
+  REQUIRE(q.exit_code == 0);
+  CHECK(q.err.find("dpts-par: pilot: 4 pieces, ") != std::string::npos);
+  CHECK(q.err.find(": the pieces collapse while a collapse costs at most ") != std::string::npos);
+  // At 100 %, none: the pieces keep every vertex.
+  const auto all = test::run(kExe, {"--verbose", "--keep", "100%", fx.dem, out});
+  REQUIRE(all.exit_code == 0);
+  CHECK(all.err.find(": no cost bound (each piece keeps its share by size)") != std::string::npos);
 }
 
 TEST_CASE("bad usage exits 2 with a one-line message naming the flag, creating nothing", "[cli]") {
