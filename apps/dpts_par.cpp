@@ -190,8 +190,11 @@ void print_pieces(const dpts::par::MetaStats& stats, bool values) {
     if (stats.piece_cost_bound >= 0) {
       std::fprintf(stderr,
                    DPTS_PROG ": pilot: %zu pieces, %.2f s: the pieces collapse while a collapse "
-                             "costs at most %.6g\n",
+                             "costs at most %.6g",
                    stats.pilot_pieces, stats.pilot_s, stats.piece_cost_bound);
+      if (stats.merge_cost_cap > 0)
+        std::fprintf(stderr, ", the merge never one over %.6g", stats.merge_cost_cap);
+      std::fputc('\n', stderr);
     } else {
       std::fprintf(stderr,
                    DPTS_PROG ": pilot: %zu pieces, %.2f s: no cost bound (each piece keeps its "

@@ -64,6 +64,7 @@ struct MetaStats {
   std::size_t pilot_pieces = 0;
   double pilot_s = 0;
   double piece_cost_bound = -1;
+  double merge_cost_cap = -1;  // and the most a collapse of the merge may cost (-1: any)
   double pilot_kept_per_vertex = 0;
   // Peak resident memory of the process (Linux VmHWM, kB; 0 elsewhere) just before the merge:
   // what the pieces needed, without the kept-vertex triangulation.

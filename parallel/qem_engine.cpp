@@ -235,26 +235,34 @@ void take_collapsed(core::QemResult&& r, const std::vector<char>& seam, CellOf&&
 }
 
 // A piece's collapse (the pilot, qem_engine.hpp): collapsed unbounded to kPieceMost x its share
-// of the target (its vertices less its seams', times the target's fraction), then on while a
-// collapse costs at most the pilot's bound, down to kPieceLeast x its share at the least.
-// note: a piece keeps what the surface needs there (San Gabriel: 0.7 to 1.5 x its share by
-// size; kilauea_utm5's sea, all outline round its salt-and-pepper voids: up to 5 x, forced),
-// where a count alone made a piece whose voids' outlines filled its count collapse all else it
-// could, at any cost: kilauea's coastal cliffs 171 m off (vertical RMSE 5.36 m, 0.64 so).
+// of the target (its vertices less its seams', times the target's fraction, and its seams),
+// then on while a collapse costs at most the pilot's bound, down to its share at the least:
+// the pieces never keep fewer than the target together, which the merge could not undo (a
+// floor of a quarter share kept 8,008 of 9,000 vertices asked of an island in a flat sea).
+// note: a piece keeps what the surface needs there (kilauea_utm5's sea, all outline round its
+// salt-and-pepper voids: up to 5 x its share, forced), where a count by size made a piece
+// whose voids' outlines filled its count collapse all else it could, at any cost: kilauea's
+// coastal cliffs came out 171 m off (vertical RMSE 5.36 m; 0.60 m so).
+// The pilot follows its pieces on down to kPieceLeast x their shares: where the merge of the
+// whole DEM would take them, about.
 constexpr double kPieceMost = 8.0, kPieceLeast = 0.25;
+// The merge never makes a collapse costing this x what the pilot finds the merge of the whole
+// DEM would stop at (QemSweep::add): kilauea_utm5's catastrophes cost 1e6 x that, its merges'
+// last collapses 1 to 20 x.
+constexpr double kMergeCostCap = 1000.0;
 
 // A pilot piece's collapse from kPieceMost x its share down to kPieceLeast x, in steps: the
 // vertices left after each, the most any collapse after the first step cost by then, and its
-// counts at kPieceMost x, kPieceLeast x and slack x its share.
+// counts at kPieceMost x, kPieceLeast x, 1 x and slack x its share.
 struct PilotCurve {
   std::vector<std::size_t> left;
   std::vector<double> cost;
-  std::size_t most = 0, least = 0, keep = 0, vertices = 0;
-  // What the piece keeps with collapses past `most` bounded by `bound`.
-  std::size_t kept_at(double bound) const {
+  std::size_t most = 0, least = 0, keep = 0, share = 0, vertices = 0;
+  // What the piece keeps with collapses past `most` bounded by `bound`, at least `floor`.
+  std::size_t kept_at(double bound, std::size_t floor) const {
     std::size_t k = most;
     for (std::size_t i = 0; i < left.size() && cost[i] <= bound; ++i) k = left[i];
-    return std::max(k, least);
+    return std::max(k, floor);
   }
 };
 
@@ -340,6 +348,7 @@ QemPieceMesh simplify_piece(const core::RasterSource& dem, const Positions& posi
     curve->most = share(kPieceMost);
     curve->least = share(kPieceLeast);
     curve->keep = keep;
+    curve->share = share(1.0);
     curve->vertices = n;
     c.collapse(curve->most, kAny);
     double most = 0;
@@ -355,7 +364,7 @@ QemPieceMesh simplify_piece(const core::RasterSource& dem, const Positions& posi
   if (cost_bound >= 0) {
     core::QemCollapse c(std::move(mesh), std::move(qo), progress);
     c.collapse(share(kPieceMost), kAny);
-    c.collapse(share(kPieceLeast), cost_bound);
+    c.collapse(share(1.0), cost_bound);
     r = c.result();
     if (progress && !progress(1.0, "simplify")) throw Cancelled();
   } else {
@@ -566,7 +575,13 @@ class QemSweep {
                    borrowed;
     const std::size_t dropped = written_ - held;
     const std::size_t keep = want > dropped ? want - dropped : 0;
-    core::QemResult r = collapse(std::move(locked), keep, progress);
+    // The pilot's cap (run_pilot): a collapse no merge of all the pieces in one group would
+    // make, which a count the outline and the voids leave out of reach of the groups' shares
+    // asked for: kilauea_utm5 at --tile-mb 4 (16 groups), the last group's coastal cliffs
+    // 124 m off, vertical RMSE 7.7 m; 19 m and 0.99 m so, 70,115 vertices kept for 65,734.
+    const double bound = st_.merge_cost_cap > 0 ? st_.merge_cost_cap
+                                                : std::numeric_limits<double>::infinity();
+    core::QemResult r = collapse(std::move(locked), keep, bound, progress);
     // Per vertex data through the collapse.
     std::vector<std::uint64_t> cell(r.source.size());
     std::vector<char> seam(r.source.size());
@@ -781,7 +796,7 @@ class QemSweep {
   // What is open collapsed to `keep` vertices, the locked ones (if any) never moving.
   // note: whether any is locked is read off `locked` itself, not passed beside it: a count
   // kept apart once missed the later pieces' cells and left every seam between groups open.
-  core::QemResult collapse(std::vector<char> locked, std::size_t keep,
+  core::QemResult collapse(std::vector<char> locked, std::size_t keep, double max_cost,
                            const core::Progress& progress) {
     core::QemOptions qo;
     if (std::find(locked.begin(), locked.end(), 1) != locked.end()) qo.locked = std::move(locked);
@@ -805,7 +820,14 @@ class QemSweep {
     // note: on one thread the walks made ahead are more work than those they save (San Gabriel
     // to 10 %: the merge's collapse 0.223 -> 0.232 s, medians of 5 alternated runs).
     if (worker_threads() > 1) qo.full_first_costs = 2;
-    return core::qem_simplify(std::move(mesh_), keep, std::move(qo), progress);
+    if (!(max_cost < std::numeric_limits<double>::infinity())) {
+      return core::qem_simplify(std::move(mesh_), keep, std::move(qo), progress);
+    }
+    core::QemCollapse c(std::move(mesh_), std::move(qo), progress);
+    c.collapse(keep, max_cost);
+    core::QemResult r = c.result();
+    if (progress && !progress(1.0, "simplify")) throw Cancelled();
+    return r;
   }
 
   // Vertices no later group can change: farther than kOpenRings edges from every vertex a
@@ -991,6 +1013,7 @@ void run_pilot(const core::RasterSource& dem, const QemEngineOptions& options,
                const std::vector<core::Piece>& pieces, const core::Progress& progress,
                MetaStats& st) {
   st.piece_cost_bound = -1;
+  st.merge_cost_cap = -1;
   if (options.max_error > 0 || pieces.empty()) return;
   const auto t0 = std::chrono::steady_clock::now();
   const std::size_t n = pieces.size();
@@ -1019,29 +1042,45 @@ void run_pilot(const core::RasterSource& dem, const QemEngineOptions& options,
   }
   std::sort(costs.begin(), costs.end());
   costs.erase(std::unique(costs.begin(), costs.end()), costs.end());
-  auto kept = [&](double bound) {
+  // What they keep at a bound, each at least its share (floored: as the pieces are) or at
+  // least kPieceLeast x it (where the merge of the whole DEM would take them, about).
+  auto kept = [&](double bound, bool floored) {
     std::size_t k = 0;
-    for (const PilotCurve& c : curves) k += c.vertices ? c.kept_at(bound) : 0;
+    for (const PilotCurve& c : curves) {
+      if (c.vertices) k += c.kept_at(bound, floored ? c.share : c.least);
+    }
     return k;
   };
-  // note: none where the least cost noted already keeps too few (near 100 %, or a flat DEM
-  // whose collapses all cost 0): the pieces keep their counts by size, as before the pilot.
-  std::size_t lo = 0, hi = costs.size();  // costs[< lo] keep enough; costs[>= hi] do not
-  while (lo < hi) {
-    const std::size_t mid = lo + (hi - lo) / 2;
-    if (kept(costs[mid]) >= want) {
-      lo = mid + 1;
-    } else {
-      hi = mid;
+  std::size_t share = 0;  // their shares alone (1 x, not slack x)
+  for (const PilotCurve& c : curves) share += c.share;
+  // The largest cost noted at which they keep at least `count` (0: none does).
+  auto bound_for = [&](std::size_t count, bool floored) {
+    std::size_t lo = 0, hi = costs.size();  // costs[< lo] keep enough; costs[>= hi] do not
+    while (lo < hi) {
+      const std::size_t mid = lo + (hi - lo) / 2;
+      if (kept(costs[mid], floored) >= count) {
+        lo = mid + 1;
+      } else {
+        hi = mid;
+      }
     }
-  }
+    return lo;
+  };
+  // note: none where the least cost noted already keeps too few (a flat DEM whose collapses
+  // all cost 0) or the largest still keeps enough (near 100 %: the shares are all there is):
+  // the pieces keep their counts by size, as before the pilot.
+  const std::size_t at = bound_for(want, true);
   st.pilot_pieces = m;
-  if (lo > 0) {
-    st.piece_cost_bound = costs[lo - 1];
+  if (at > 0 && at < costs.size()) {
+    st.piece_cost_bound = costs[at - 1];
+    // The merge's cap: kMergeCostCap x the cost at which they would keep their shares alone,
+    // unfloored (where the merge of the whole DEM would stop, about).
+    const std::size_t end = bound_for(share, false);
+    if (end > 0 && costs[end - 1] > 0) st.merge_cost_cap = kMergeCostCap * costs[end - 1];
     double vertices = 0;
     for (const PilotCurve& c : curves) vertices += static_cast<double>(c.vertices);
     st.pilot_kept_per_vertex =
-        static_cast<double>(kept(st.piece_cost_bound)) / std::max(1.0, vertices);
+        static_cast<double>(kept(st.piece_cost_bound, true)) / std::max(1.0, vertices);
   }
   st.pilot_s = seconds_since(t0);
 }

@@ -39,7 +39,7 @@ def test_every_method_gives_dpts_par_mesh(tmp_path, algo):
 def test_simplify_a_file_gives_dpts_par_mesh(tmp_path):
     m = dpts.simplify(SAMPLE, keep=0.1)
     assert m.vertices.shape == (1232, 3) and m.vertices.dtype == np.float64
-    assert m.faces.shape == (2396, 3) and m.faces.dtype == np.uint32
+    assert m.faces.shape == (2395, 3) and m.faces.dtype == np.uint32
     assert m.faces.max() == 1231 and m.input_vertices == 12321
     assert m.crs.startswith('PROJCS["UTM Zone 25, Southern Hemisphere"')
     with pytest.raises(ValueError):
