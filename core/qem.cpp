@@ -287,7 +287,7 @@ class Collapser {
            double max_cost = std::numeric_limits<double>::infinity()) {
     prepare(keep);
     const bool bounded = max_cost < std::numeric_limits<double>::infinity();
-    last_cost_ = 0;
+    run_max_cost_ = 0;
     const std::size_t start = alive_;
     const double span = start > keep ? static_cast<double>(start - keep) : 1.0;
     while (alive_ > keep && !heap_.empty()) {
@@ -332,7 +332,7 @@ class Collapser {
         continue;
       }
       collapse(p);
-      last_cost_ = std::max(last_cost_, p.cost);
+      run_max_cost_ = std::max(run_max_cost_, p.cost);
       ++r.collapses;
       if (r.collapses % 4096 == 0 && progress_ &&
           !progress_(static_cast<double>(r.collapses) / span, "simplify")) {
@@ -342,7 +342,7 @@ class Collapser {
   }
 
   // The most a collapse of the last run() cost (0: none made).
-  double last_cost() const { return last_cost_; }
+  double run_max_cost() const { return run_max_cost_; }
 
   // The output (compacted), once run is done: the queue and the connectivity go first, so
   // that the output never sits beside them (the peak of the piece engine's merge).
@@ -870,7 +870,7 @@ class Collapser {
   std::vector<std::uint32_t> mark_;
   std::uint32_t ring_mark_ = 0;
   std::uint32_t collapses_ = 0;
-  double last_cost_ = 0;
+  double run_max_cost_ = 0;
   bool prepared_ = false;
 };
 
@@ -895,7 +895,7 @@ QemCollapse& QemCollapse::operator=(QemCollapse&&) noexcept = default;
 
 std::size_t QemCollapse::vertices() const { return impl_->c.alive(); }
 
-double QemCollapse::max_cost_made() const { return impl_->c.last_cost(); }
+double QemCollapse::max_cost_made() const { return impl_->c.run_max_cost(); }
 
 void QemCollapse::queued_costs(std::vector<float>& out) const { impl_->c.queued_costs(out); }
 

@@ -1092,7 +1092,6 @@ std::vector<core::Piece> plan_qem(const core::RasterSource& dem, const QemEngine
   const auto bytes = options.tile_bytes;
   const std::vector<core::Piece> pieces =
       divide_dem(dem, options.keep, options.levels, bytes, 1, progress, st, kQemPieceVertices);
-  run_pilot(dem, options, pieces, progress, st);
   // The merge holds one group's kept vertices (and the open band before it), the next group's
   // pieces' outputs beside it (where there is a next group), and the output unless it goes to
   // a sink.
@@ -1112,6 +1111,8 @@ std::vector<core::Piece> plan_qem(const core::RasterSource& dem, const QemEngine
           (options.sink ? 0 : st.target_vertices * kQemBytesPerOutputVertex) +
           pieces_in_flight_bytes(pieces, 1, bytes),
       options.memory_limit_bytes);
+  // note: after the check, which refuses a run before any piece's work.
+  run_pilot(dem, options, pieces, progress, st);
   return pieces;
 }
 
