@@ -912,11 +912,11 @@ QemResult QemCollapse::result() {
 }
 
 QemResult qem_simplify(TriMesh mesh, std::size_t keep, QemOptions options,
-                       const Progress& progress) {
+                       const Progress& progress, double max_cost) {
   QemResult r;
   Collapser c(std::move(mesh), options, progress);
   r.input_vertices = c.alive();
-  c.run(keep, r);
+  c.run(keep, r, max_cost);
   c.result(r);
   if (progress && !progress(1.0, "simplify")) throw Cancelled();
   return r;

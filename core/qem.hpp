@@ -13,6 +13,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -104,11 +105,12 @@ struct QemResult {
 
 // Simplifies a height-field mesh (faces counter-clockwise seen from above; an edge has at most
 // two faces) by quadric edge collapse until at most `keep` vertices are left or no collapse
-// is allowed. Throws std::invalid_argument on a non-manifold edge, Cancelled when progress
+// is allowed (none costing more than max_cost). Throws std::invalid_argument on a non-manifold edge, Cancelled when progress
 // returns false.
 // The mesh and options are taken by value: move them in to save their memory while it runs.
 QemResult qem_simplify(TriMesh mesh, std::size_t keep, QemOptions options = {},
-                       const Progress& progress = nullptr);
+                       const Progress& progress = nullptr,
+                       double max_cost = std::numeric_limits<double>::infinity());
 
 // qem_simplify in steps, for a caller that bounds the collapse's cost from several meshes'
 // queues (the piece engine's pre-merge) or by a cost found beforehand (its pieces): the mesh

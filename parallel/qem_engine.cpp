@@ -820,14 +820,7 @@ class QemSweep {
     // note: on one thread the walks made ahead are more work than those they save (San Gabriel
     // to 10 %: the merge's collapse 0.223 -> 0.232 s, medians of 5 alternated runs).
     if (worker_threads() > 1) qo.full_first_costs = 2;
-    if (!(max_cost < std::numeric_limits<double>::infinity())) {
-      return core::qem_simplify(std::move(mesh_), keep, std::move(qo), progress);
-    }
-    core::QemCollapse c(std::move(mesh_), std::move(qo), progress);
-    c.collapse(keep, max_cost);
-    core::QemResult r = c.result();
-    if (progress && !progress(1.0, "simplify")) throw Cancelled();
-    return r;
+    return core::qem_simplify(std::move(mesh_), keep, std::move(qo), progress, max_cost);
   }
 
   // Vertices no later group can change: farther than kOpenRings edges from every vertex a
