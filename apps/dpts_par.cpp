@@ -189,17 +189,18 @@ void print_pieces(const dpts::par::MetaStats& stats, bool values) {
   if (stats.pilot_pieces > 0) {
     if (stats.piece_cost_bound >= 0) {
       std::fprintf(stderr,
-                   DPTS_PROG ": pilot: %zu pieces, %.2f s: the pieces collapse while a collapse "
-                             "costs at most %.6g",
-                   stats.pilot_pieces, stats.pilot_s, stats.piece_cost_bound);
+                   DPTS_PROG ": pilot: %zu pieces (%zu finished there), %.2f s: the pieces "
+                             "collapse while a collapse costs at most %.6g",
+                   stats.pilot_pieces, stats.pilot_finished, stats.pilot_s,
+                   stats.piece_cost_bound);
       if (stats.merge_cost_cap > 0)
         std::fprintf(stderr, ", the merge never one over %.6g", stats.merge_cost_cap);
       std::fputc('\n', stderr);
     } else {
       std::fprintf(stderr,
-                   DPTS_PROG ": pilot: %zu pieces, %.2f s: no cost bound (each piece keeps its "
-                             "share by size)\n",
-                   stats.pilot_pieces, stats.pilot_s);
+                   DPTS_PROG ": pilot: %zu pieces (%zu finished there), %.2f s: no cost bound "
+                             "(each piece keeps its share by size)\n",
+                   stats.pilot_pieces, stats.pilot_finished, stats.pilot_s);
     }
   }
   std::fprintf(stderr,
@@ -277,10 +278,10 @@ dpts::core::TriMesh simplify_qem_ranks(const dpts::core::RasterSource& source,
                                        const dpts::core::Progress& progress,
                                        dpts::par::MetaStats& st) {
   using namespace dpts;
-  const std::vector<core::Piece> pieces = par::plan_qem(source, qo, progress, st);
+  std::vector<par::QemPieceMesh> outputs;
+  const std::vector<core::Piece> pieces = par::plan_qem(source, qo, progress, st, &outputs);
   mpi::go(true);
   const auto t0 = std::chrono::steady_clock::now();
-  std::vector<par::QemPieceMesh> outputs;
   const std::vector<std::size_t> own = mpi::share(pieces.size(), 0, mpi::ranks());
   // note: progress counts pieces, here and received, so it ends at 100 % of all of them.
   const double share = pieces.empty() ? 1.0 : static_cast<double>(own.size()) / pieces.size();
@@ -481,6 +482,7 @@ int run_rank(int argc, char** argv) {
   std::optional<io::GdalRaster> source;
   std::optional<tbb::global_control> parallelism;
   std::vector<core::Piece> pieces;
+  std::vector<par::QemPieceMesh> outputs;  // the pilot's pieces' among them
   par::MetaStats st;
   par::QemEngineOptions qo;
   bool planned = false;
@@ -493,7 +495,7 @@ int run_rank(int argc, char** argv) {
       dem.emplace(io::open_dem(o.input, read_options(o)));
       source.emplace(*dem);
       qo = qem_options(o);
-      pieces = par::plan_qem(*source, qo, stop, st);
+      pieces = par::plan_qem(*source, qo, stop, st, &outputs);
       planned = true;
     }
   } catch (const std::exception& e) {
@@ -502,7 +504,6 @@ int run_rank(int argc, char** argv) {
   if (!mpi::go(false)) return 0;  // rank 0 failed first, and says why
   try {
     if (!planned) throw std::runtime_error(error.empty() ? "could not plan the pieces" : error);
-    std::vector<par::QemPieceMesh> outputs;
     const std::vector<std::size_t> own = mpi::share(pieces.size(), mpi::rank(), mpi::ranks());
     par::simplify_qem_pieces(*source, qo, pieces, own, st, outputs, stop);
     for (const std::size_t i : own) {

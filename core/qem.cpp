@@ -116,7 +116,7 @@ class Collapser {
   // a large mesh (QSlim's, a whole DEM) they take seconds before the first collapse, and a
   // stop asked for meanwhile must be honoured (Cancelled).
   Collapser(TriMesh&& mesh, QemOptions& options, const Progress& progress)
-      : o_(options), progress_(progress) {
+      : o_(&options), progress_(&progress) {
     const std::size_t n = mesh.vertex_count();
     const std::size_t f = mesh.faces.size();
     if (n >= kNone || 3 * f >= kNone) throw std::invalid_argument("qem: mesh too large");
@@ -129,12 +129,12 @@ class Collapser {
       }
     }
     mesh.faces = {};
-    plane_ = std::move(o_.plane_xy);
-    if (!plane_.empty() && (plane_.size() != 2 * n || !o_.to_plane)) {
+    plane_ = std::move(o_->plane_xy);
+    if (!plane_.empty() && (plane_.size() != 2 * n || !o_->to_plane)) {
       throw std::invalid_argument("qem: plane_xy needs 2 values per vertex and to_plane");
     }
     check();
-    if (o_.opposites.empty()) {
+    if (o_->opposites.empty()) {
       link_opposites();
     } else {
       adopt_opposites();
@@ -153,8 +153,8 @@ class Collapser {
     }
     for (std::size_t v = 0; v < n; ++v) {
       if (out_[v] == kNone) flags_[v] |= kGone;  // not a corner of any face
-      if (!o_.locked.empty() && o_.locked[v]) flags_[v] |= kLocked;
-      if (!o_.frozen.empty() && o_.frozen[v]) flags_[v] |= kFrozen;
+      if (!o_->locked.empty() && o_->locked[v]) flags_[v] |= kLocked;
+      if (!o_->frozen.empty() && o_->frozen[v]) flags_[v] |= kFrozen;
       if (out_[v] != kNone && opp_[out_[v]] == kNone) flags_[v] |= kBorder;
     }
     area_.resize(f);
@@ -163,7 +163,7 @@ class Collapser {
     init_quadrics();
     check();
     // note: after the quadrics, which give no outline quadric between two locked vertices.
-    if (o_.lock_outline) {
+    if (o_->lock_outline) {
       for (std::size_t v = 0; v < n; ++v) {
         if (flags_[v] & kBorder) flags_[v] |= kLocked;
       }
@@ -174,13 +174,19 @@ class Collapser {
 
   std::size_t alive() const { return alive_; }
 
+  // A copy's options and progress: those of the QemCollapse holding it.
+  void rebind(QemOptions& options, const Progress& progress) {
+    o_ = &options;
+    progress_ = &progress;
+  }
+
   // Every edge's first cost queued (run()'s first step; prepare() may be called before).
   // keep: the count run() will collapse to (0: not known; prepare_full_costs needs it).
   void prepare(std::size_t keep = 0) {
     if (prepared_) return;
     prepared_ = true;
     heap_ = IndexedMinHeap(fv_.size());
-    // note: with o_.for_ranges, each edge's first cost on its own, maybe on several threads,
+    // note: with o_->for_ranges, each edge's first cost on its own, maybe on several threads,
     // then queued in edge order: the same queue as in order on this thread.
     // Edge h's first cost into cost; false if it has none (not queued).
     // note: the quadric's cost alone, a lower bound, as update() queues: an edge's full cost
@@ -195,10 +201,10 @@ class Collapser {
       cost = p.cost;
       return true;
     };
-    if (o_.for_ranges) {
+    if (o_->for_ranges) {
       std::vector<double> first(fv_.size());
       std::vector<char> planned(fv_.size(), 0);
-      o_.for_ranges(fv_.size(), [&](std::size_t begin, std::size_t end) {
+      o_->for_ranges(fv_.size(), [&](std::size_t begin, std::size_t end) {
         for (auto h = static_cast<std::uint32_t>(begin); h < end; ++h) {
           planned[h] = first_cost(h, first[h]);
         }
@@ -206,8 +212,8 @@ class Collapser {
       for (std::uint32_t h = 0; h < fv_.size(); ++h) {
         if (planned[h]) heap_.push_unordered(h, first[h]);
       }
-      if (o_.full_first_costs > 0 && keep > 0 && keep < alive_ && o_.area_weight != 0) {
-        prepare_full_costs(first, planned, o_.full_first_costs * (alive_ - keep));
+      if (o_->full_first_costs > 0 && keep > 0 && keep < alive_ && o_->area_weight != 0) {
+        prepare_full_costs(first, planned, o_->full_first_costs * (alive_ - keep));
       }
     } else {
       double cost;
@@ -222,7 +228,7 @@ class Collapser {
     mark_.assign(xyz_.size() / 3, 0);
   }
 
-  // The full costs (o_.full_first_costs) of the interior edges of the m least first costs.
+  // The full costs (o_->full_first_costs) of the interior edges of the m least first costs.
   // note: the piece engine's merge (collapsing about a fifth of its vertices) pops most edges
   // near the bottom of the queue once at their first cost, walks both ends' stars for the
   // area term, and mostly queues them again: San Gabriel to 10 %, 51.8k of its 59.5k pops,
@@ -260,7 +266,7 @@ class Collapser {
       if (candidate(h) && first[h] <= bound) full_ids_.push_back(h);
     }
     full_costs_.assign(full_ids_.size(), std::numeric_limits<double>::quiet_NaN());
-    o_.for_ranges(full_ids_.size(), [&](std::size_t begin, std::size_t end) {
+    o_->for_ranges(full_ids_.size(), [&](std::size_t begin, std::size_t end) {
       for (std::size_t i = begin; i < end; ++i) {
         Plan p;
         if (plan(full_ids_[i], p, true)) full_costs_[i] = p.cost;
@@ -334,8 +340,8 @@ class Collapser {
       collapse(p);
       run_max_cost_ = std::max(run_max_cost_, p.cost);
       ++r.collapses;
-      if (r.collapses % 4096 == 0 && progress_ &&
-          !progress_(static_cast<double>(r.collapses) / span, "simplify")) {
+      if (r.collapses % 4096 == 0 && *progress_ &&
+          !(*progress_)(static_cast<double>(r.collapses) / span, "simplify")) {
         throw Cancelled();
       }
     }
@@ -402,7 +408,7 @@ class Collapser {
       p.xy[0] = plane_[2 * p.at], p.xy[1] = plane_[2 * p.at + 1];
       return true;
     }
-    return o_.to_plane(p.x, p.xy);
+    return o_->to_plane(p.x, p.xy);
   }
 
   const double* pos(std::uint32_t v) const { return &xyz_[3 * v]; }
@@ -462,17 +468,17 @@ class Collapser {
     }
   }
 
-  // The caller's pairing (o_.opposites), each pair checked: two half-edges of one edge, in
+  // The caller's pairing (o_->opposites), each pair checked: two half-edges of one edge, in
   // opposite directions.
   // note: a grid TIN's is known from its squares (grid_tin), where link_opposites' search
   // took 3.5 % of qem's instructions and 6 % of its branch misses; the pieces' pairing from
   // the grid, checked here: San Gabriel to 10 %, 9.33G -> 9.18G instructions, 56.7M -> 54.7M
   // branch misses (cachegrind).
   void adopt_opposites() {
-    if (o_.opposites.size() != fv_.size()) {
+    if (o_->opposites.size() != fv_.size()) {
       throw std::invalid_argument("qem: one opposite per half-edge");
     }
-    opp_ = std::move(o_.opposites);
+    opp_ = std::move(o_->opposites);
     const auto m = static_cast<std::uint32_t>(opp_.size());
     for (std::uint32_t h = 0; h < m; ++h) {
       const std::uint32_t g = opp_[h];
@@ -484,14 +490,14 @@ class Collapser {
 
   void init_quadrics() {
     const std::size_t n = xyz_.size() / 3;
-    if (!o_.quadrics.empty()) {
-      if (o_.quadrics.size() != n) throw std::invalid_argument("qem: one quadric per vertex");
-      q_ = std::move(o_.quadrics);
+    if (!o_->quadrics.empty()) {
+      if (o_->quadrics.size() != n) throw std::invalid_argument("qem: one quadric per vertex");
+      q_ = std::move(o_->quadrics);
       return;
     }
     // Triangle quadrics (the squared distance to each whole triangle's plane, weighted by its
-    // size; plane quadrics with o_.plane_quadrics) and the outline's quadrics at weight 1 (by
-    // default: o_.outline_weight): the outline cannot move anyway. On
+    // size; plane quadrics with o_->plane_quadrics) and the outline's quadrics at weight 1 (by
+    // default: o_->outline_weight): the outline cannot move anyway. On
     // st_helens_crater, 60 points x 3 sets, error x1e-4 at 10/30/50/70 %: plane quadrics,
     // outline weight 100: 18.5/5.68/2.72/1.21; triangle, 100: 18.3/5.75/2.56/1.09; triangle, 1:
     // 17.5/5.74/2.57/1.08 (probabilistic triangle quadrics: 66.8 at 10 %).
@@ -505,7 +511,7 @@ class Collapser {
       const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
       double nrm[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
                        u[0] * v[1] - u[1] * v[0]};
-      if (o_.plane_quadrics) {
+      if (o_->plane_quadrics) {
         const double len = std::sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
         if (len > 0) nrm[0] /= len, nrm[1] /= len, nrm[2] /= len;
       }
@@ -523,7 +529,7 @@ class Collapser {
         const double len = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
         if (len > 0) m[0] /= len, m[1] /= len, m[2] /= len;
         Quadric eq = Quadric::plane(m, -(m[0] * t[0] + m[1] * t[1] + m[2] * t[2]));
-        if (o_.outline_weight != 1.0) eq *= o_.outline_weight;
+        if (o_->outline_weight != 1.0) eq *= o_->outline_weight;
         q_[src(h)] += eq;
         q_[dst(h)] += eq;
       }
@@ -572,17 +578,17 @@ class Collapser {
     around(
         v, [](std::uint32_t) {}, [&](std::uint32_t p) { prev = src(p); });
     if (prev == kNone || prev == next) return false;
-    if (o_.outline_collinear ? !o_.outline_collinear(next, v, prev)
+    if (o_->outline_collinear ? !o_->outline_collinear(next, v, prev)
                              : orient(pos(next), pos(v), pos(prev)) != CGAL::COLLINEAR) {
       return false;
     }
-    return !o_.outline_chord_ok || o_.outline_chord_ok(next, prev);
+    return !o_->outline_chord_ok || o_->outline_chord_ok(next, prev);
   }
 
   // Quadric cost plus the area term for moving both ends of h to x (area false: the quadric's
   // cost alone).
   double cost(std::uint32_t h, const Quadric& q, const double* x, bool area = true) const {
-    if (!area || o_.area_weight == 0) return q(x);
+    if (!area || o_->area_weight == 0) return q(x);
     const std::uint32_t a = src(h), b = dst(h);
     const std::uint32_t fl = h / 3, fr = opp_[h] == kNone ? kNone : opp_[h] / 3;
     double before = area_[fl] + (fr != kNone ? area_[fr] : 0.0), after = 0;
@@ -598,7 +604,7 @@ class Collapser {
           [](std::uint32_t) {});
     }
     const double d = after - before;
-    return q(x) + o_.area_weight * d * d;
+    return q(x) + o_->area_weight * d * d;
   }
 
   // The collapse of edge h (either half-edge) the rules allow, and its cost (area false: without
@@ -689,7 +695,7 @@ class Collapser {
         const double* s = pos(sv);
         if (orient(s, p.x, r) != CGAL::LEFT_TURN || too_thin(s, p.x, r)) return false;
         if (plane_.empty()) {
-          if (o_.triangle_ok && !o_.triangle_ok(s, p.x, r)) return false;
+          if (o_->triangle_ok && !o_->triangle_ok(s, p.x, r)) return false;
           continue;
         }
         const double* ps = &plane_[2 * sv];
@@ -697,7 +703,7 @@ class Collapser {
         const double s3[3] = {ps[0], ps[1], s[2]}, x3[3] = {p.xy[0], p.xy[1], p.x[2]},
                      r3[3] = {pr[0], pr[1], r[2]};
         if (orient(s3, x3, r3) != CGAL::LEFT_TURN) return false;
-        if (o_.triangle_ok && !o_.triangle_ok(s3, x3, r3)) return false;
+        if (o_->triangle_ok && !o_->triangle_ok(s3, x3, r3)) return false;
       }
       return true;
     };
@@ -845,11 +851,12 @@ class Collapser {
   // Asks progress whether to go on (Cancelled if not), before the first collapse (run() asks
   // it every 4096 collapses, with the fraction done).
   void check() const {
-    if (progress_ && !progress_(0.0, "simplify")) throw Cancelled();
+    if (*progress_ && !(*progress_)(0.0, "simplify")) throw Cancelled();
   }
 
-  QemOptions& o_;
-  const Progress& progress_;
+  // note: pointers, not references: a copy (QemCollapse::copy) points them at its own.
+  QemOptions* o_;
+  const Progress* progress_;
   std::vector<double> xyz_;
   std::vector<double> plane_;  // per vertex x, y in the second plane (empty: none)
   std::vector<std::uint32_t> fv_, opp_, out_;
@@ -879,6 +886,7 @@ class Collapser {
 struct QemCollapse::Impl {
   Impl(TriMesh&& mesh, QemOptions&& options, Progress&& progress)
       : o(std::move(options)), p(std::move(progress)), c(std::move(mesh), o, p) {}
+  Impl(const Impl& other) : o(other.o), p(other.p), c(other.c) { c.rebind(o, p); }
   QemOptions o;
   const Progress p;  // the collapser keeps references to both
   Collapser c;
@@ -889,6 +897,8 @@ QemCollapse::QemCollapse(TriMesh mesh, QemOptions options, Progress progress)
   impl_->c.prepare();
   r_.input_vertices = impl_->c.alive();
 }
+QemCollapse::QemCollapse(const QemCollapse& other)
+    : impl_(std::make_unique<Impl>(*other.impl_)), r_(other.r_) {}
 QemCollapse::~QemCollapse() = default;
 QemCollapse::QemCollapse(QemCollapse&&) noexcept = default;
 QemCollapse& QemCollapse::operator=(QemCollapse&&) noexcept = default;

@@ -122,6 +122,9 @@ class QemCollapse {
   ~QemCollapse();
   QemCollapse(QemCollapse&&) noexcept;
   QemCollapse& operator=(QemCollapse&&) noexcept;
+  // A copy, to go on from where this one is: the same collapses as this one would make. Its
+  // options' tests and its progress are copies (what they point at must outlive both).
+  QemCollapse(const QemCollapse& other);
   // Vertices left (at first: those of the mesh on some face).
   std::size_t vertices() const;
   // The most a collapse of the last collapse() call cost (0: it made none). Costs rise as

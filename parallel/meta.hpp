@@ -43,6 +43,7 @@ struct PieceReport {
   std::size_t budget = 0;  // vertices the piece should keep
   std::size_t kept = 0;    // vertices it kept (more than budget when its outline needs them)
   double read_s = 0, simplify_s = 0;  // this piece's own times (simplify: triangulate to end)
+  bool by_pilot = false;  // qem: its output made by the pilot (plan_qem), not simplified again
 };
 
 struct MetaStats {
@@ -62,6 +63,7 @@ struct MetaStats {
   // found for the pieces' collapses (-1: none; the pieces keep their shares by size) and
   // the vertices a piece keeps at that bound per surface vertex, on average over the pilot's.
   std::size_t pilot_pieces = 0;
+  std::size_t pilot_finished = 0;  // of them, those it took on to their outputs (by_pilot)
   double pilot_s = 0;
   double piece_cost_bound = -1;
   double merge_cost_cap = -1;  // and the most a collapse of the merge may cost (-1: any)

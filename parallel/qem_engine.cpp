@@ -246,18 +246,171 @@ void take_collapsed(core::QemResult&& r, const std::vector<char>& seam, CellOf&&
 // The pilot follows its pieces on down to kPieceLeast x their shares: where the merge of the
 // whole DEM would take them, about.
 constexpr double kPieceMost = 8.0, kPieceLeast = 0.25;
+// The pilot keeps a copy of its piece's collapse at kPieceResume x its share, and once it
+// knows the bound goes on from there to the piece's output, where every collapse the copy
+// made cost at most the bound: the collapses a piece makes from scratch, as a bounded run
+// makes those of an unbounded one until one costs more than its bound (Collapser::run).
+// note: so a pilot piece is not simplified twice: San Gabriel to 10 %, 8 of its 64 pieces,
+// about a tenth of its CPU. A copy holds about what its piece's collapse held at first (its
+// arrays are the whole piece's; core::piece_bytes): at most kPilotCopies, while they fit one
+// tile together, held until the pilot's end (kilauea_utm5 at --tile-mb 4: 8 copies of
+// 10k-vertex pieces took its peak from 71 to 102 MB; 1 fits its tile).
+constexpr double kPieceResume = 2.0;
+constexpr std::size_t kPilotCopies = 8;
 // The merge never makes a collapse costing this x what the pilot finds the merge of the whole
 // DEM would stop at (QemSweep::add): kilauea_utm5's catastrophes cost 1e6 x that, its merges'
 // last collapses 1 to 20 x.
 constexpr double kMergeCostCap = 1000.0;
+constexpr double kAnyCost = std::numeric_limits<double>::infinity();
+
+// A piece's window read and made into a mesh ready to collapse, beside what its collapse's
+// tests read (its cells, seams, outline test and vertical bound), which they point at: it is
+// neither copied nor moved.
+class PieceCollapse {
+ public:
+  PieceCollapse(const core::RasterSource& dem, const Positions& positions, const core::Piece& p,
+                double fraction, const QemEngineOptions& options, PieceReport& report,
+                core::Progress progress)
+      : dem_(dem),
+        wc0_(p.col0),
+        wr0_(p.row0),
+        // The piece's cells and one more column and row (the next pieces' first): the grid
+        // squares whose top-left corner is the piece's.
+        wc1_(std::min(dem.width(), p.col0 + p.width + 1)),
+        wr1_(std::min(dem.height(), p.row0 + p.height + 1)),
+        ww_(wc1_ - wc0_),
+        fraction_(fraction) {
+    const int wh = wr1_ - wr0_;
+    grid_ = read_window(dem, wc0_, wr0_, ww_, wh, report.read_s);
+    t0_ = std::chrono::steady_clock::now();
+    std::vector<std::uint32_t> opposites;
+    core::Tin tin = core::grid_tin(grid_, core::delaunay_diagonal(dem.frame()), &opposites);
+    if (tin.faces.empty()) return;
+    cells_ = std::move(tin.cells);
+    const double unit = dem.frame().metres_per_unit;
+    core::TriMesh mesh;
+    std::vector<double> grid_xy(2 * cells_.size());
+    for (std::size_t v = 0; v < cells_.size(); ++v) {
+      grid_xy[2 * v] = wc0_ + static_cast<int>(cells_[v] % static_cast<std::uint32_t>(ww_));
+      grid_xy[2 * v + 1] = wr0_ + static_cast<int>(cells_[v] / static_cast<std::uint32_t>(ww_));
+    }
+    const std::vector<double> xy = positions.of(grid_xy);
+    core::QemOptions qo;
+    if (positions.projected) {
+      qo.plane_xy = positions.frame_of(grid_xy);
+      qo.to_plane = positions.to_plane();
+    }
+    grid_xy = {};
+    mesh.xyz.resize(3 * cells_.size());
+    seam_.assign(cells_.size(), 0);
+    for (std::size_t v = 0; v < cells_.size(); ++v) {
+      const int c = static_cast<int>(cells_[v] % static_cast<std::uint32_t>(ww_));
+      const int r = static_cast<int>(cells_[v] / static_cast<std::uint32_t>(ww_));
+      mesh.xyz[3 * v] = xy[2 * v];
+      mesh.xyz[3 * v + 1] = xy[2 * v + 1];
+      mesh.xyz[3 * v + 2] = grid_.z[cells_[v]] / unit;
+      // A window side inside the raster is a seam: another window has its cells too.
+      const bool seam = (c == 0 && wc0_ > 0) || (c == ww_ - 1 && wc1_ < dem.width()) ||
+                        (r == 0 && wr0_ > 0) || (r == wh - 1 && wr1_ < dem.height());
+      seam_[v] = seam ? 1 : 0;
+      locked_ += seam ? 1 : 0;
+    }
+    qo.locked = seam_;
+    mesh.faces = std::move(tin.faces);
+    core::fix_orientation(mesh, &opposites);
+    qo.opposites = std::move(opposites);
+    qo.outline_collinear = positions.collinear(&cells_, static_cast<std::uint64_t>(ww_));
+    chord_ = dem.outline_chord_test(wc0_, wr0_, ww_);
+    if (chord_) {
+      qo.outline_chord_ok = [this](std::uint32_t a, std::uint32_t b) {
+        return chord_(cells_[a], cells_[b]);
+      };
+    }
+    keep_ = share(options.slack);
+    if (options.max_error > 0) {
+      // The window holds every cell the piece's triangles cover.
+      bound_.emplace(dem, options.max_error);
+      qo.triangle_ok = [this](const double* a, const double* b, const double* c) {
+        return bound_->ok(a, b, c, wc0_, wr0_, wc1_ - 1, wr1_ - 1, [this](int col, int row) {
+          return grid_.z[grid_.index(col - wc0_, row - wr0_)];
+        });
+      };
+    } else {
+      grid_ = {};
+    }
+    collapse_.emplace(std::move(mesh), std::move(qo), std::move(progress));
+  }
+  PieceCollapse(const PieceCollapse&) = delete;
+  PieceCollapse& operator=(const PieceCollapse&) = delete;
+
+  // No faces: nothing to collapse (an empty output).
+  bool empty() const { return !collapse_; }
+  // s x the piece's share of the target, and its seams.
+  std::size_t share(double s) const {
+    const std::size_t n = cells_.size();
+    return std::min<std::size_t>(
+        n, locked_ + static_cast<std::size_t>(
+                         std::ceil(s * fraction_ * static_cast<double>(n - locked_))));
+  }
+  // Its count by size: slack x its share.
+  std::size_t keep() const { return keep_; }
+  std::size_t vertices() const { return cells_.size(); }
+  core::QemCollapse& collapse() { return *collapse_; }
+
+  // The piece's output from c (its collapse or a copy of it), its counts and time in report.
+  QemPieceMesh finish(core::QemCollapse&& c, PieceReport& report,
+                      const core::Progress& progress) {
+    core::QemResult r = c.result();
+    if (progress && !progress(1.0, "simplify")) throw Cancelled();
+    grid_ = {};
+    QemPieceMesh out;
+    take_collapsed(
+        std::move(r), seam_,
+        [&](std::uint32_t input) {
+          // note: 64-bit: a raster may have more than 2^32 cells (a window has fewer).
+          const std::uint32_t local = cells_[input];
+          const std::uint64_t col =
+              static_cast<std::uint64_t>(wc0_) + local % static_cast<std::uint32_t>(ww_);
+          const std::uint64_t row =
+              static_cast<std::uint64_t>(wr0_) + local / static_cast<std::uint32_t>(ww_);
+          return row * static_cast<std::uint64_t>(dem_.width()) + col;
+        },
+        out);
+    out.mesh.xyz.shrink_to_fit();
+    out.mesh.faces.shrink_to_fit();
+    out.quadrics.shrink_to_fit();
+    out.plane_xy.shrink_to_fit();
+    report.budget = keep_;
+    report.kept = out.cell.size();
+    report.simplify_s = seconds_since(t0_);
+    return out;
+  }
+
+ private:
+  const core::RasterSource& dem_;
+  const int wc0_, wr0_, wc1_, wr1_, ww_;
+  const double fraction_;
+  core::HeightGrid grid_;
+  std::chrono::steady_clock::time_point t0_;
+  std::vector<std::uint32_t> cells_;  // per vertex, its cell in the window (row-major)
+  std::vector<char> seam_;            // per vertex, on a seam (locked)
+  std::size_t locked_ = 0, keep_ = 0;
+  std::function<bool(std::uint64_t, std::uint64_t)> chord_;
+  std::optional<VerticalBound> bound_;
+  std::optional<core::QemCollapse> collapse_;
+};
 
 // A pilot piece's collapse from kPieceMost x its share down to kPieceLeast x, in steps: the
 // vertices left after each, the most any collapse after the first step cost by then, and its
-// counts at kPieceMost x, kPieceLeast x, 1 x and slack x its share.
+// counts at kPieceMost x, kPieceLeast x, 1 x and slack x its share; maybe a copy of it at
+// kPieceResume x its share, and the most a collapse past kPieceMost had cost then.
 struct PilotCurve {
   std::vector<std::size_t> left;
   std::vector<double> cost;
   std::size_t most = 0, least = 0, keep = 0, share = 0, vertices = 0;
+  std::unique_ptr<PieceCollapse> piece;  // with resume
+  std::optional<core::QemCollapse> resume;
+  double resume_cost = 0;
   // What the piece keeps with collapses past `most` bounded by `bound`, at least `floor`.
   std::size_t kept_at(double bound, std::size_t floor) const {
     std::size_t k = most;
@@ -266,131 +419,55 @@ struct PilotCurve {
   }
 };
 
+// A piece's collapse to its output: bounded by cost_bound (>= 0: the pilot's), else to its
+// count by size.
 QemPieceMesh simplify_piece(const core::RasterSource& dem, const Positions& positions,
                             const core::Piece& p, double fraction, double cost_bound,
                             const QemEngineOptions& options, PieceReport& report,
-                            const core::Progress& progress, PilotCurve* curve = nullptr) {
-  // The piece's cells and one more column and row (the next pieces' first): the grid squares
-  // whose top-left corner is the piece's.
-  const int wc0 = p.col0, wr0 = p.row0;
-  const int wc1 = std::min(dem.width(), p.col0 + p.width + 1);
-  const int wr1 = std::min(dem.height(), p.row0 + p.height + 1);
-  const int ww = wc1 - wc0, wh = wr1 - wr0;
-  core::HeightGrid grid = read_window(dem, wc0, wr0, ww, wh, report.read_s);
-  const auto t0 = std::chrono::steady_clock::now();
-  std::vector<std::uint32_t> opposites;
-  const core::Tin tin = core::grid_tin(grid, core::delaunay_diagonal(dem.frame()), &opposites);
-  QemPieceMesh out;
-  if (tin.faces.empty()) return out;
-  const double unit = dem.frame().metres_per_unit;
-  core::TriMesh mesh;
-  std::vector<double> grid_xy(2 * tin.cells.size());
-  for (std::size_t v = 0; v < tin.cells.size(); ++v) {
-    grid_xy[2 * v] = wc0 + static_cast<int>(tin.cells[v] % static_cast<std::uint32_t>(ww));
-    grid_xy[2 * v + 1] = wr0 + static_cast<int>(tin.cells[v] / static_cast<std::uint32_t>(ww));
-  }
-  const std::vector<double> xy = positions.of(grid_xy);
-  core::QemOptions qo;
-  if (positions.projected) {
-    qo.plane_xy = positions.frame_of(grid_xy);
-    qo.to_plane = positions.to_plane();
-  }
-  grid_xy = {};
-  mesh.xyz.resize(3 * tin.cells.size());
-  qo.locked.assign(tin.cells.size(), 0);
-  std::size_t locked = 0;
-  for (std::size_t v = 0; v < tin.cells.size(); ++v) {
-    const int c = static_cast<int>(tin.cells[v] % static_cast<std::uint32_t>(ww));
-    const int r = static_cast<int>(tin.cells[v] / static_cast<std::uint32_t>(ww));
-    mesh.xyz[3 * v] = xy[2 * v];
-    mesh.xyz[3 * v + 1] = xy[2 * v + 1];
-    mesh.xyz[3 * v + 2] = grid.z[tin.cells[v]] / unit;
-    // A window side inside the raster is a seam: another window has its cells too.
-    const bool seam = (c == 0 && wc0 > 0) || (c == ww - 1 && wc1 < dem.width()) ||
-                      (r == 0 && wr0 > 0) || (r == wh - 1 && wr1 < dem.height());
-    qo.locked[v] = seam ? 1 : 0;
-    locked += seam ? 1 : 0;
-  }
-  mesh.faces = tin.faces;
-  core::fix_orientation(mesh, &opposites);
-  qo.opposites = std::move(opposites);
-  qo.outline_collinear = positions.collinear(&tin.cells, static_cast<std::uint64_t>(ww));
-  const auto chord = dem.outline_chord_test(wc0, wr0, ww);
-  if (chord) {
-    qo.outline_chord_ok = [&tin, &chord](std::uint32_t a, std::uint32_t b) {
-      return chord(tin.cells[a], tin.cells[b]);
-    };
-  }
-  const std::size_t n = tin.cells.size();
-  // s x the piece's share of the target, and its seams.
-  auto share = [&](double s) {
-    return std::min<std::size_t>(
-        n, locked + static_cast<std::size_t>(
-                        std::ceil(s * fraction * static_cast<double>(n - locked))));
-  };
-  const std::size_t keep = share(options.slack);
-  std::optional<VerticalBound> bound;
-  if (options.max_error > 0) {
-    // The window holds every cell the piece's triangles cover.
-    bound.emplace(dem, options.max_error);
-    qo.triangle_ok = [&](const double* a, const double* b, const double* c) {
-      return bound->ok(a, b, c, wc0, wr0, wc1 - 1, wr1 - 1,
-                       [&](int col, int row) { return grid.z[grid.index(col - wc0, row - wr0)]; });
-    };
-  } else {
-    grid = {};
-  }
-  const std::vector<char> seam = qo.locked;
-  constexpr double kAny = std::numeric_limits<double>::infinity();
-  core::QemResult r;
-  if (curve) {
-    core::QemCollapse c(std::move(mesh), std::move(qo), progress);
-    curve->most = share(kPieceMost);
-    curve->least = share(kPieceLeast);
-    curve->keep = keep;
-    curve->share = share(1.0);
-    curve->vertices = n;
-    c.collapse(curve->most, kAny);
-    double most = 0;
-    for (std::size_t left = curve->most; left > curve->least;) {
-      left = std::max(curve->least, left - std::max<std::size_t>(1, left / 20));
-      c.collapse(left, kAny);
-      most = std::max(most, c.max_cost_made());
-      curve->left.push_back(c.vertices());
-      curve->cost.push_back(most);
-    }
-    return out;
-  }
+                            const core::Progress& progress) {
+  PieceCollapse piece(dem, positions, p, fraction, options, report, progress);
+  if (piece.empty()) return {};
+  core::QemCollapse& c = piece.collapse();
   if (cost_bound >= 0) {
-    core::QemCollapse c(std::move(mesh), std::move(qo), progress);
-    c.collapse(share(kPieceMost), kAny);
-    c.collapse(share(1.0), cost_bound);
-    r = c.result();
-    if (progress && !progress(1.0, "simplify")) throw Cancelled();
+    c.collapse(piece.share(kPieceMost), kAnyCost);
+    c.collapse(piece.share(1.0), cost_bound);
   } else {
-    r = core::qem_simplify(std::move(mesh), keep, std::move(qo), progress);
+    c.collapse(piece.keep(), kAnyCost);
   }
-  grid = {};
-  take_collapsed(
-      std::move(r), seam,
-      [&](std::uint32_t input) {
-        // note: 64-bit: a raster may have more than 2^32 cells (a window has fewer).
-        const std::uint32_t local = tin.cells[input];
-        const std::uint64_t c =
-            static_cast<std::uint64_t>(wc0) + local % static_cast<std::uint32_t>(ww);
-        const std::uint64_t row =
-            static_cast<std::uint64_t>(wr0) + local / static_cast<std::uint32_t>(ww);
-        return row * static_cast<std::uint64_t>(dem.width()) + c;
-      },
-      out);
-  out.mesh.xyz.shrink_to_fit();
-  out.mesh.faces.shrink_to_fit();
-  out.quadrics.shrink_to_fit();
-  out.plane_xy.shrink_to_fit();
-  report.budget = keep;
-  report.kept = out.cell.size();
-  report.simplify_s = seconds_since(t0);
-  return out;
+  return piece.finish(std::move(c), report, progress);
+}
+
+// A pilot piece's collapse into curve (and the piece, with a copy of its collapse, where
+// `copy`).
+void pilot_piece(const core::RasterSource& dem, const Positions& positions, const core::Piece& p,
+                 double fraction, const QemEngineOptions& options, PieceReport& report,
+                 const core::Progress& progress, bool copy, PilotCurve& curve) {
+  auto piece = std::make_unique<PieceCollapse>(dem, positions, p, fraction, options, report,
+                                               progress);
+  if (piece->empty()) return;
+  core::QemCollapse& c = piece->collapse();
+  curve.most = piece->share(kPieceMost);
+  curve.least = piece->share(kPieceLeast);
+  curve.keep = piece->keep();
+  curve.share = piece->share(1.0);
+  curve.vertices = piece->vertices();
+  // note: never past the least a piece collapses to (its share, or its count by size).
+  const std::size_t resume = std::max(piece->share(kPieceResume), curve.keep);
+  c.collapse(curve.most, kAnyCost);
+  double most = 0;
+  for (std::size_t left = curve.most;;) {
+    if (copy && !curve.resume && c.vertices() <= resume && c.vertices() >= curve.keep) {
+      curve.resume.emplace(c);
+      curve.resume_cost = most;
+    }
+    if (left <= curve.least) break;
+    left = std::max(curve.least, left - std::max<std::size_t>(1, left / 20));
+    c.collapse(left, kAnyCost);
+    most = std::max(most, c.max_cost_made());
+    curve.left.push_back(c.vertices());
+    curve.cost.push_back(most);
+  }
+  if (curve.resume) curve.piece = std::move(piece);
 }
 
 // What stitching outputs [first, end) appends at most: their vertices (seam vertices counted
@@ -1002,9 +1079,11 @@ constexpr std::size_t kPilotEvery = 32, kPilotLeast = 8;
 // The pilot (qem_engine.hpp): a spread of the pieces simplified down to kPieceLeast x their
 // shares, each collapse's cost noted; the bound is the largest cost at which they would keep,
 // together, what their counts by size (slack x their shares) keep. Sets st's pilot fields.
+// With outputs, the pieces whose copies (at most copy_bytes of them) it could take on to
+// their outputs are there, their reports by_pilot.
 void run_pilot(const core::RasterSource& dem, const QemEngineOptions& options,
                const std::vector<core::Piece>& pieces, const core::Progress& progress,
-               MetaStats& st) {
+               MetaStats& st, std::size_t copy_bytes, std::vector<QemPieceMesh>* outputs) {
   st.piece_cost_bound = -1;
   st.merge_cost_cap = -1;
   if (options.max_error > 0 || pieces.empty()) return;
@@ -1016,14 +1095,23 @@ void run_pilot(const core::RasterSource& dem, const QemEngineOptions& options,
   const double fraction = qem_fraction(st);
   const Positions positions(dem);
   SharedProgress shared(progress, m);
+  auto piece_of = [&](std::size_t j) { return (2 * j + 1) * n / (2 * m); };
+  // Which pieces' collapses are copied: the first while they fit copy_bytes together.
+  std::vector<char> copy(m, 0);
+  for (std::size_t j = 0, left = copy_bytes; outputs && j < std::min(m, kPilotCopies); ++j) {
+    const std::size_t bytes = core::piece_bytes(pieces[piece_of(j)], 1);
+    if (bytes > left) break;
+    copy[j] = 1;
+    left -= bytes;
+  }
   tbb::parallel_for(std::size_t{0}, m, [&](std::size_t j) {
     shared.check();
-    const std::size_t i = (2 * j + 1) * n / (2 * m);
     // Progress: the pilot's pieces done (stage "pilot"), asked within each too (a stop).
-    simplify_piece(dem, positions, pieces[i], fraction, -1, options, reports[j],
-                   [&](double, std::string_view) { return shared.update(j, 0.0, "pilot"); },
-                   &curves[j]);
-    shared.update(j, 1.0, "pilot");
+    // note: j by value: a copy of the collapse (and its progress) goes on after this task.
+    pilot_piece(dem, positions, pieces[piece_of(j)], fraction, options, reports[j],
+                [&shared, j](double, std::string_view) { return shared.update(j, 0.0, "pilot"); },
+                copy[j] != 0, curves[j]);
+    if (!curves[j].resume) shared.update(j, 1.0, "pilot");
   });
   shared.check();
   // The bound: kept_at falls as it grows; the largest of the costs noted that keeps `want`.
@@ -1075,13 +1163,41 @@ void run_pilot(const core::RasterSource& dem, const QemEngineOptions& options,
     st.pilot_kept_per_vertex =
         static_cast<double>(kept(st.piece_cost_bound, true)) / std::max(1.0, vertices);
   }
+  // The pieces whose copies made no collapse over the bound: on from there to their outputs.
+  if (outputs) outputs->resize(n);
+  tbb::parallel_for(std::size_t{0}, m, [&](std::size_t j) {
+    PilotCurve& c = curves[j];
+    if (!c.resume) return;
+    shared.check();
+    const double bound = st.piece_cost_bound;
+    if (bound < 0 || c.resume_cost <= bound) {
+      core::QemCollapse resume = std::move(*c.resume);
+      c.resume.reset();
+      if (bound >= 0) {
+        resume.collapse(c.share, bound);
+      } else {
+        resume.collapse(c.keep, kAnyCost);
+      }
+      const std::size_t i = piece_of(j);
+      PieceReport& report = st.pieces[i];
+      report.read_s = reports[j].read_s;
+      (*outputs)[i] = c.piece->finish(std::move(resume), report, nullptr);
+      report.by_pilot = true;
+    }
+    c.resume.reset();
+    c.piece.reset();
+    shared.update(j, 1.0, "pilot");
+  });
+  shared.check();
+  for (std::size_t j = 0; j < m; ++j) st.pilot_finished += st.pieces[piece_of(j)].by_pilot;
   st.pilot_s = seconds_since(t0);
 }
 
 }  // namespace
 
 std::vector<core::Piece> plan_qem(const core::RasterSource& dem, const QemEngineOptions& options,
-                                  const core::Progress& progress, MetaStats& st) {
+                                  const core::Progress& progress, MetaStats& st,
+                                  std::vector<QemPieceMesh>* outputs) {
   const auto bytes = options.tile_bytes;
   const std::vector<core::Piece> pieces =
       divide_dem(dem, options.keep, options.levels, bytes, 1, progress, st, kQemPieceVertices);
@@ -1098,14 +1214,16 @@ std::vector<core::Piece> plan_qem(const core::RasterSource& dem, const QemEngine
     group = std::max(group, n * fraction);
   }
   const std::size_t beside = groups.size() > 2 ? kQemBytesPerPieceVertex : 0;
-  check_memory(
-      dem, st.target_vertices,
+  const std::size_t need =
       static_cast<std::size_t>(group * static_cast<double>(kQemBytesPerKeptVertex + beside)) +
-          (options.sink ? 0 : st.target_vertices * kQemBytesPerOutputVertex) +
-          pieces_in_flight_bytes(pieces, 1, bytes),
-      options.memory_limit_bytes);
-  // note: after the check, which refuses a run before any piece's work.
-  run_pilot(dem, options, pieces, progress, st);
+      (options.sink ? 0 : st.target_vertices * kQemBytesPerOutputVertex) +
+      pieces_in_flight_bytes(pieces, 1, bytes);
+  check_memory(dem, st.target_vertices, need, options.memory_limit_bytes);
+  // note: after the check, which refuses a run before any piece's work. Its copies take at
+  // most a tile, and no more than the check leaves of the limit.
+  const std::size_t limit = options.memory_limit_bytes;
+  const std::size_t copies = std::min(bytes, limit == 0 ? bytes : limit - need);
+  run_pilot(dem, options, pieces, progress, st, outputs ? copies : 0, outputs);
   return pieces;
 }
 
@@ -1122,6 +1240,10 @@ void simplify_qem_pieces(const core::RasterSource& dem, const QemEngineOptions& 
                       for (std::size_t k = r.begin(); k < r.end(); ++k) {
                         shared.check();
                         const std::size_t i = which[k];
+                        if (st.pieces[i].by_pilot) {  // its output made by the pilot
+                          shared.update(k, 1.0, "simplify");
+                          continue;
+                        }
                         const core::Progress piece_progress = [&](double fr, std::string_view) {
                           return shared.update(k, fr, "simplify");
                         };
@@ -1139,13 +1261,15 @@ core::TriMesh simplify_qem(const core::RasterSource& dem, const QemEngineOptions
   MetaStats local;
   MetaStats& st = stats ? *stats : local;
   // 1. Count surface vertices per block, streaming; divide.
-  const std::vector<core::Piece> pieces = plan_qem(dem, options, progress, st);
+  // The pilot's pieces' outputs come from it (most of them).
+  std::vector<QemPieceMesh> outputs;
+  const std::vector<core::Piece> pieces = plan_qem(dem, options, progress, st, &outputs);
   // 2 and 3, a group of pieces at a time: simplify its pieces concurrently, seams locked; then
   // stitch them to what is open and collapse on.
   const std::vector<std::size_t> groups = qem_groups(pieces, qem_fraction(st), options);
   st.merge_groups = groups.size() - 1;
   QemSweep sweep(dem, options, pieces, st);
-  std::vector<QemPieceMesh> outputs(pieces.size());
+  outputs.resize(pieces.size());
   const double all = static_cast<double>(std::max<std::size_t>(1, pieces.size()));
   if (groups.size() < 2) return sweep.finish();  // no pieces
   const std::size_t last = groups.size() - 2;

@@ -5,7 +5,9 @@
 //     into pieces that fit the tile budget (as for vp-meta).
 //     Then the pilot: a spread of the pieces (every 32nd in k-d order, at least 8) collapsed
 //     down to a quarter of their shares of the target, each collapse's cost noted, gives the
-//     cost bound at which they would keep, together, `slack` x their shares.
+//     cost bound at which they would keep, together, `slack` x their shares. Where a copy of
+//     a pilot piece's collapse (taken at twice its share) made no collapse over the bound, it
+//     goes on from there to the piece's output, the same as step 2 would make.
 //  2. oneTBB tasks read each piece's window (its cells and one more column and row, so that
 //     every grid square belongs to exactly one piece) through their own GDAL handles, build
 //     its grid TIN and collapse it with the seam vertices (those other windows share) locked,
@@ -123,13 +125,17 @@ core::TriMesh simplify_qem(const core::RasterSource& dem, const QemEngineOptions
 // The engine in its three stages, for running the pieces elsewhere (dpts-mpi): every process
 // plans the same pieces, each simplifies its share, and one merges them all; the mesh is the
 // same bytes as simplify_qem's, which is these three in one process.
-// 1. The streaming count, the division, the pilot (its pieces simplified again in stage 2:
-// every process runs it, to the same bound) and the memory check: the pieces, in k-d order;
-// st gets the counts, the pilot's bound and a report per piece.
+// 1. The streaming count, the division, the memory check and the pilot (every process runs
+// it, to the same bound): the pieces, in k-d order; st gets the counts, the pilot's bound and
+// a report per piece. With outputs (sized to the pieces), the pilot's pieces it took to their
+// end are there, their reports marked by_pilot (stage 2 passes them); else stage 2 simplifies
+// them again.
 std::vector<core::Piece> plan_qem(const core::RasterSource& dem, const QemEngineOptions& options,
-                                  const core::Progress& progress, MetaStats& st);
+                                  const core::Progress& progress, MetaStats& st,
+                                  std::vector<QemPieceMesh>* outputs = nullptr);
 // 2. Pieces `which` (indices into pieces) simplified concurrently into outputs[i] (outputs
-// sized to the pieces), their reports into st.pieces[i]. Progress stage "simplify".
+// sized to the pieces), their reports into st.pieces[i], but for those by_pilot. Progress
+// stage "simplify".
 void simplify_qem_pieces(const core::RasterSource& dem, const QemEngineOptions& options,
                          const std::vector<core::Piece>& pieces,
                          const std::vector<std::size_t>& which, MetaStats& st,

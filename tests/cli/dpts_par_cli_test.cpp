@@ -220,12 +220,15 @@ TEST_CASE("dpts-par --verbose prints the pieces' values and budgets", "[cli][met
   // qem: the pilot's pieces and the cost bound it found for the pieces' collapses.
   const auto q = test::run(kExe, {"--verbose", "--vertices", "100", fx.dem, out});
   REQUIRE(q.exit_code == 0);
-  CHECK(q.err.find("dpts-par: pilot: 4 pieces, ") != std::string::npos);
+  CHECK(q.err.find("dpts-par: pilot: 4 pieces (") != std::string::npos);
+  CHECK(q.err.find(" finished there), ") != std::string::npos);
   CHECK(q.err.find(": the pieces collapse while a collapse costs at most ") != std::string::npos);
   // At 100 %, none: the pieces keep every vertex.
   const auto all = test::run(kExe, {"--verbose", "--keep", "100%", fx.dem, out});
   REQUIRE(all.exit_code == 0);
   CHECK(all.err.find(": no cost bound (each piece keeps its share by size)") != std::string::npos);
+  // Each of the pilot's pieces taken on to its output there (copies at every vertex).
+  CHECK(all.err.find("pilot: 4 pieces (4 finished there), ") != std::string::npos);
 }
 
 TEST_CASE("bad usage exits 2 with a one-line message naming the flag, creating nothing", "[cli]") {

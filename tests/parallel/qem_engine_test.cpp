@@ -193,8 +193,42 @@ TEST_CASE("qem's piece engine keeps hills beside voids whose outlines fill a pie
   INFO("RMSE " << pieces.first << " m, max " << pieces.second << " m; whole grid " << whole.first
                << ", " << whole.second);
   CHECK(pieces.first < 1.5 * whole.first);
-  WARN("RMSE " << pieces.first << " max " << pieces.second << " whole " << whole.first << " " << whole.second);
   CHECK(pieces.second < 2.0 * whole.second);
+}
+
+TEST_CASE("qem's pilot finishes its pieces as the pieces' stage would", "[parallel][qem]") {
+  Fixture fx(false);
+  const std::size_t merge_bytes = GENERATE(std::size_t{64} << 10, std::size_t{1} << 30);
+  const std::size_t keep = GENERATE(std::size_t{600}, std::size_t{3000});
+  INFO("merge bytes " << merge_bytes << ", keep " << keep);
+  const io::GdalRaster dem(fx.info);
+  // A tile of 1 MB: room for several copies of the pilot's pieces' collapses (of 16 pieces).
+  par::QemEngineOptions o = options(keep, merge_bytes);
+  o.tile_bytes = std::size_t{1} << 20;
+  par::MetaStats a;
+  const core::TriMesh finished = par::simplify_qem(dem, o, nullptr, &a);
+  CHECK(a.pilot_pieces >= 8);
+  CHECK(a.pilot_finished >= 4);
+  if (merge_bytes < o.tile_bytes) CHECK(a.merge_groups > 1);
+  CHECK(a.pilot_finished <= a.pilot_pieces);
+  // The stages without the pilot's outputs: every piece simplified in stage 2.
+  par::MetaStats b;
+  const std::vector<core::Piece> pieces = par::plan_qem(dem, o, nullptr, b);
+  std::size_t marked = 0;
+  for (const par::PieceReport& r : b.pieces) marked += r.by_pilot ? 1 : 0;
+  CHECK(marked == 0);
+  std::vector<std::size_t> all(pieces.size());
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+  std::vector<par::QemPieceMesh> outputs;
+  par::simplify_qem_pieces(dem, o, pieces, all, b, outputs, nullptr);
+  const core::TriMesh again = par::merge_qem(dem, o, pieces, outputs, b, nullptr);
+  CHECK(a.piece_cost_bound == b.piece_cost_bound);
+  CHECK(finished.xyz == again.xyz);
+  CHECK(finished.faces == again.faces);
+  for (std::size_t i = 0; i < pieces.size(); ++i) {
+    INFO("piece " << i);
+    CHECK(a.pieces[i].kept == b.pieces[i].kept);
+  }
 }
 
 TEST_CASE("qem's piece engine gives the same mesh for 1, 2 and 4 threads",
