@@ -355,7 +355,12 @@ class PieceCollapse {
   // Its count by size: slack x its share.
   std::size_t keep() const { return keep_; }
   std::size_t vertices() const { return cells_.size(); }
-  core::QemCollapse& collapse() { return *collapse_; }
+  // Its collapse, once (not empty()).
+  core::QemCollapse take_collapse() {
+    core::QemCollapse c = std::move(*collapse_);
+    collapse_.reset();
+    return c;
+  }
 
   // The piece's output from c (its collapse or a copy of it), its counts and time in report.
   QemPieceMesh finish(core::QemCollapse&& c, PieceReport& report,
@@ -427,7 +432,7 @@ QemPieceMesh simplify_piece(const core::RasterSource& dem, const Positions& posi
                             const core::Progress& progress) {
   PieceCollapse piece(dem, positions, p, fraction, options, report, progress);
   if (piece.empty()) return {};
-  core::QemCollapse& c = piece.collapse();
+  core::QemCollapse c = piece.take_collapse();
   if (cost_bound >= 0) {
     c.collapse(piece.share(kPieceMost), kAnyCost);
     c.collapse(piece.share(1.0), cost_bound);
@@ -445,7 +450,8 @@ void pilot_piece(const core::RasterSource& dem, const Positions& positions, cons
   auto piece = std::make_unique<PieceCollapse>(dem, positions, p, fraction, options, report,
                                                progress);
   if (piece->empty()) return;
-  core::QemCollapse& c = piece->collapse();
+  // note: freed at the end, where a copy goes on (the piece's tests are held for it).
+  core::QemCollapse c = piece->take_collapse();
   curve.most = piece->share(kPieceMost);
   curve.least = piece->share(kPieceLeast);
   curve.keep = piece->keep();
