@@ -252,6 +252,9 @@ TEST_CASE("qem's piece engine stops when asked, also during a merge beside the n
           "[parallel][qem]") {
   Fixture fx(false);
   tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+  // Groups of 64 kB, pieces in tiles of 1 MB: room for copies of the pilot's collapses.
+  par::QemEngineOptions o = options(600, std::size_t{64} << 10);
+  o.tile_bytes = std::size_t{1} << 20;
   // One run reporting: "simplify" while a group's merge runs beside the next group's pieces
   // (never falling), then "merge", the last group's.
   std::vector<std::pair<std::string, double>> calls;
@@ -262,10 +265,10 @@ TEST_CASE("qem's piece engine stops when asked, also during a merge beside the n
     return true;
   };
   par::MetaStats stats;
-  par::simplify_qem(io::GdalRaster(fx.info), options(600), record, &stats);
+  par::simplify_qem(io::GdalRaster(fx.info), o, record, &stats);
   std::vector<core::Piece> pieces;
   for (const auto& p : stats.pieces) pieces.push_back(p.piece);
-  REQUIRE(par::qem_groups(pieces, 600.0 / 6000, options(600)).size() > 3);  // several groups
+  REQUIRE(par::qem_groups(pieces, 600.0 / 6000, o).size() > 3);  // several groups
   bool merging = false;
   double last = 0;
   for (const auto& [stage, f] : calls) {
@@ -277,16 +280,26 @@ TEST_CASE("qem's piece engine stops when asked, also during a merge beside the n
     }
   }
   CHECK(merging);
-  // Stopped at any call, it stops: the task merging beside the pieces is waited for.
+  // Stopped at any call, it stops: the task merging beside the pieces is waited for; and at
+  // each of the pilot's (its pieces' collapses, then the copies going on to their outputs).
   const std::size_t n = calls.size();
-  for (const std::size_t stop : {std::size_t{1}, n / 4, n / 2, 3 * n / 4, n - 1}) {
+  std::vector<std::size_t> stops = {1, n / 4, n / 2, 3 * n / 4, n - 1};
+  std::size_t pilot_calls = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (calls[k].first != "pilot") continue;
+    stops.push_back(k + 1);
+    ++pilot_calls;
+  }
+  CHECK(pilot_calls >= stats.pilot_pieces);
+  CHECK(stats.pilot_finished > 0);
+  for (const std::size_t stop : stops) {
     INFO("stop at call " << stop << " of " << n);
     std::size_t seen = 0;
     const core::Progress ask = [&](double, std::string_view) {
       std::lock_guard<std::mutex> hold(m);
       return ++seen < stop;
     };
-    CHECK_THROWS_AS(par::simplify_qem(io::GdalRaster(fx.info), options(600), ask), Cancelled);
+    CHECK_THROWS_AS(par::simplify_qem(io::GdalRaster(fx.info), o, ask), Cancelled);
   }
 }
 
