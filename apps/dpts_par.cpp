@@ -196,6 +196,13 @@ void print_pieces(const dpts::par::MetaStats& stats, bool values) {
       if (stats.merge_cost_cap > 0)
         std::fprintf(stderr, ", the merge never one over %.6g", stats.merge_cost_cap);
       std::fputc('\n', stderr);
+      if (stats.pilot_kept_per_outline != stats.pilot_kept_per_inner) {
+        std::fprintf(stderr,
+                     DPTS_PROG ": pilot: a piece keeps %.3g of its vertices beside no void, %.3g "
+                               "of those beside one (%.3g at any cost)\n",
+                     stats.pilot_kept_per_inner, stats.pilot_kept_per_outline,
+                     stats.pilot_forced_per_outline);
+      }
     } else {
       std::fprintf(stderr,
                    DPTS_PROG ": pilot: %zu pieces (%zu finished there), %.2f s: no cost bound "

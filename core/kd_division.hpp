@@ -16,15 +16,20 @@ struct BlockCounts {
   int block = 16;
   int blocks_x = 0, blocks_y = 0;
   std::vector<std::uint32_t> counts;  // blocks_y rows of blocks_x
+  // Of them, those beside a no-data cell (one of their four neighbours): where the outline of
+  // the valid data bends round voids. Empty where not counted.
+  std::vector<std::uint32_t> outline;
   std::uint32_t at(int bx, int by) const {
     return counts[static_cast<std::size_t>(by) * blocks_x + bx];
   }
 };
 
-// A piece: cells [col0, col0 + width) x [row0, row0 + height), and its surface vertices.
+// A piece: cells [col0, col0 + width) x [row0, row0 + height), its surface vertices and, of
+// them, those beside a no-data cell (BlockCounts::outline; 0 where not counted).
 struct Piece {
   int col0 = 0, row0 = 0, width = 0, height = 0;
   std::size_t vertices = 0;
+  std::size_t outline = 0;
 };
 
 struct DivisionOptions {

@@ -52,6 +52,7 @@ core::BlockCounts count_blocks(const core::RasterSource& dem, std::size_t strip_
   bc.blocks_x = (dem.width() + bc.block - 1) / bc.block;
   bc.blocks_y = (dem.height() + bc.block - 1) / bc.block;
   bc.counts.assign(static_cast<std::size_t>(bc.blocks_x) * bc.blocks_y, 0);
+  bc.outline.assign(bc.counts.size(), 0);
   // Strips of whole blocks of the raster (GDAL reads whole blocks anyway) and of whole count
   // blocks (so that no two strips count into one block), read concurrently: as many strips as
   // threads at once within the budget, and at least 4 a thread where the raster has the rows.
@@ -82,11 +83,24 @@ core::BlockCounts count_blocks(const core::RasterSource& dem, std::size_t strip_
     // note: a strip of no-data has no surface vertex: not searched (8e8 no-data cells of a
     // dense DEFLATE GeoTIFF: about 15 % off the count).
     if (valid == 0) return;
+    // Whether the cell at (col, row of g) is no-data (false outside the raster: its sides
+    // are straight runs of the outline, which a collapse simplifies).
+    auto void_at = [&](int col, int row) {
+      return col >= 0 && col < g.width && row >= 0 && row < g.height &&
+             std::isnan(g.z[g.index(col, row)]);
+    };
     for (std::uint32_t cell : core::surface_cells(g)) {
-      const int row = static_cast<int>(cell / static_cast<std::uint32_t>(g.width)) + a;
+      const int gr = static_cast<int>(cell / static_cast<std::uint32_t>(g.width));
+      const int row = gr + a;
       const int col = static_cast<int>(cell % static_cast<std::uint32_t>(g.width));
       if (row < r0 || row >= r1) continue;
-      ++bc.counts[static_cast<std::size_t>(row / bc.block) * bc.blocks_x + col / bc.block];
+      const std::size_t block =
+          static_cast<std::size_t>(row / bc.block) * bc.blocks_x + col / bc.block;
+      ++bc.counts[block];
+      // note: the strip's rows and one more each side are in g (a row off g is off the raster).
+      if (void_at(col - 1, gr) || void_at(col + 1, gr) || void_at(col, gr - 1) ||
+          void_at(col, gr + 1))
+        ++bc.outline[block];
     }
   };
   std::mutex report;
@@ -348,6 +362,15 @@ std::vector<core::Piece> divide_dem(const core::RasterSource& dem, const KeepTar
   div.col_metres = f.col_metres();
   div.row_metres = f.row_metres();
   std::vector<core::Piece> pieces = core::kd_divide(bc, div);
+  // Each piece's outline count: the sum over its blocks (split lines fall on block lines).
+  for (core::Piece& p : pieces) {
+    const int bx1 = (p.col0 + p.width + bc.block - 1) / bc.block;
+    const int by1 = (p.row0 + p.height + bc.block - 1) / bc.block;
+    for (int by = p.row0 / bc.block; by < by1; ++by) {
+      for (int bx = p.col0 / bc.block; bx < bx1; ++bx)
+        p.outline += bc.outline[static_cast<std::size_t>(by) * bc.blocks_x + bx];
+    }
+  }
   std::size_t total = 0;
   for (const auto& p : pieces) total += p.vertices;
   if (total < 3) {

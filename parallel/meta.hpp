@@ -61,13 +61,15 @@ struct MetaStats {
   std::size_t merge_groups = 0;
   // qem: its pilot (qem_engine.hpp): the pieces it simplified, its time, the cost bound it
   // found for the pieces' collapses (-1: none; the pieces keep their shares by size) and
-  // the vertices a piece keeps at that bound per surface vertex, on average over the pilot's.
+  // the vertices a piece keeps at that bound (fitted over the pilot's pieces).
   std::size_t pilot_pieces = 0;
   std::size_t pilot_finished = 0;  // of them, those it took on to their outputs (by_pilot)
   double pilot_s = 0;
   double piece_cost_bound = -1;
   double merge_cost_cap = -1;  // and the most a collapse of the merge may cost (-1: any)
-  double pilot_kept_per_vertex = 0;
+  double pilot_kept_per_inner = 0, pilot_kept_per_outline = 0;  // the vertices a piece keeps
+  // at the bound per vertex, for those not beside a void and those beside one (Piece::outline)
+  double pilot_forced_per_outline = 0;  // and those it keeps at any cost, per one beside a void
   // Peak resident memory of the process (Linux VmHWM, kB; 0 elsewhere) just before the merge:
   // what the pieces needed, without the kept-vertex triangulation.
   std::size_t peak_rss_before_merge_kb = 0;

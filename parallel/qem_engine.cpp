@@ -593,11 +593,18 @@ class QemSweep {
         later_(pieces, st.block, dem.width(), dem.height()),
         st_(st) {
     // Each piece's weight in the target's shares: its surface vertices, or with the pilot's
-    // bound the vertices it kept (estimated from the pilot's until it is merged).
+    // bound the vertices it kept (estimated from the pilot's until it is merged, by its
+    // vertices beside voids and the rest).
     weight_.resize(pieces.size());
+    outline_.resize(pieces.size());
+    forced_per_outline_ = st.piece_cost_bound >= 0 ? st.pilot_forced_per_outline : 0.0;
     for (std::size_t i = 0; i < pieces.size(); ++i) {
-      weight_[i] = static_cast<double>(pieces[i].vertices) *
-                   (st.piece_cost_bound >= 0 ? st.pilot_kept_per_vertex : 1.0);
+      outline_[i] = static_cast<double>(std::min(pieces[i].outline, pieces[i].vertices));
+      const double v = static_cast<double>(pieces[i].vertices);
+      const double o = static_cast<double>(std::min(pieces[i].outline, pieces[i].vertices));
+      weight_[i] = st.piece_cost_bound >= 0
+                       ? (v - o) * st.pilot_kept_per_inner + o * st.pilot_kept_per_outline
+                       : v;
     }
     if (options.max_error > 0) {
       bound_.emplace(dem, options.max_error);
@@ -620,6 +627,13 @@ class QemSweep {
     total_ = 0;
     for (std::size_t i = 0; i < weight_.size(); ++i) (i < end ? done_ : total_) += weight_[i];
     total_ += done_;
+    // Of the weights, the vertices no collapse removes (the outlines round voids), estimated.
+    double forced_done = 0, forced_total = 0;
+    for (std::size_t i = 0; i < weight_.size(); ++i) {
+      const double f = std::min(weight_[i], forced_per_outline_ * outline_[i]);
+      (i < end ? forced_done : forced_total) += f;
+    }
+    forced_total += forced_done;
     const bool last = end == pieces.size();
     if (first == 0 && last && !bound_) {
       const auto t0 = std::chrono::steady_clock::now();
@@ -650,10 +664,17 @@ class QemSweep {
     // vertices), not in these pieces'. (Counted in this share, they once made a DEM of two
     // groups at --keep 100 % lose as many vertices: kilauea_utm5 657,336 -> 656,339.)
     const double fraction = qem_fraction(st_);
+    // note: the target less the forced vertices is shared by the rest of the weights: a group
+    // whose voids' outlines hold more than its share of the whole cannot reach it (kilauea_utm5
+    // at --tile-mb 4, its last group the sea: 70,115 vertices kept of 65,734).
+    const double target = static_cast<double>(st_.target_vertices);
+    const double free_share = total_ > forced_total
+                                  ? (done_ - forced_done) / (total_ - forced_total)
+                                  : done_ / total_;
     const std::size_t want =
         last ? st_.target_vertices
              : static_cast<std::size_t>(
-                   std::llround(static_cast<double>(st_.target_vertices) * (done_ / total_) +
+                   std::llround(forced_done + std::max(0.0, target - forced_total) * free_share +
                                 (1 - std::min(1.0, fraction)) * static_cast<double>(boundary))) +
                    borrowed;
     const std::size_t dropped = written_ - held;
@@ -1025,6 +1046,8 @@ class QemSweep {
   MetaStats& st_;
   std::vector<double> weight_;   // per piece (see the constructor)
   double total_ = 0, done_ = 0;  // the weights of all pieces, and of those merged
+  std::vector<double> outline_;  // per piece, its vertices beside voids
+  double forced_per_outline_ = 0;  // of which no collapse removes (MetaStats)
   std::optional<VerticalBound> bound_;
   const std::function<bool(std::uint64_t, std::uint64_t)> chord_ = dem_.outline_chord_test();
   std::optional<BlockCache> cells_;
@@ -1081,6 +1104,45 @@ namespace {
 // note: the pilot's pieces: every kPilotEvery-th in k-d order (spread over the DEM), at least
 // kPilotLeast (all of a DEM of fewer). San Gabriel: 8 of 64 pieces.
 constexpr std::size_t kPilotEvery = 32, kPilotLeast = 8;
+// With several merge groups, also up to kPilotOutline pieces at least kPilotOutlineShare of
+// whose vertices lie beside voids, those with the largest share first: the target is shared
+// among the groups by what their pieces keep, estimated before they are simplified, and such
+// a piece keeps several times what others do (kilauea_utm5 at --tile-mb 4: pieces 45 % void
+// kept 60 % of their vertices, whole ones 16-21 %; its last group, the sea, kept 14,133
+// vertices where the spread's mean gave 6,919, and the merge kept 70,115 of 65,734 asked).
+constexpr std::size_t kPilotOutline = 4;
+constexpr double kPilotOutlineShare = 0.1;
+
+// What a piece keeps under the pilot's bound, per vertex: inner ones and those beside voids.
+struct KeptModel {
+  double inner = 0, outline = 0;
+};
+// The least-squares fit of kept = inner x a + outline x b over the pilot's pieces, a and b in
+// [0, 1]; where the outline counts tell nothing (none, or in proportion to the rest) one rate
+// for both.
+KeptModel fit_kept(const std::vector<double>& kept, const std::vector<double>& inner,
+                   const std::vector<double>& outline) {
+  double ii = 0, io = 0, oo = 0, ki = 0, ko = 0, k = 0, v = 0;
+  for (std::size_t j = 0; j < kept.size(); ++j) {
+    ii += inner[j] * inner[j];
+    io += inner[j] * outline[j];
+    oo += outline[j] * outline[j];
+    ki += kept[j] * inner[j];
+    ko += kept[j] * outline[j];
+    k += kept[j];
+    v += inner[j] + outline[j];
+  }
+  const double rate = v > 0 ? std::clamp(k / v, 0.0, 1.0) : 0.0;
+  const double det = ii * oo - io * io;
+  if (!(det > 1e-6 * ii * oo)) return {rate, rate};
+  KeptModel m{(ki * oo - ko * io) / det, (ko * ii - ki * io) / det};
+  if (m.outline > 1 || m.outline < 0 || m.inner < 0 || m.inner > 1) {
+    // On the boundary: b clamped, a refitted.
+    m.outline = std::clamp(m.outline, 0.0, 1.0);
+    m.inner = ii > 0 ? std::clamp((ki - m.outline * io) / ii, 0.0, 1.0) : rate;
+  }
+  return m;
+}
 
 // The pilot (qem_engine.hpp): a spread of the pieces simplified down to kPieceLeast x their
 // shares, each collapse's cost noted; the bound is the largest cost at which they would keep,
@@ -1089,42 +1151,71 @@ constexpr std::size_t kPilotEvery = 32, kPilotLeast = 8;
 // their outputs are there, their reports by_pilot.
 void run_pilot(const core::RasterSource& dem, const QemEngineOptions& options,
                const std::vector<core::Piece>& pieces, const core::Progress& progress,
-               MetaStats& st, std::size_t copy_bytes, std::vector<QemPieceMesh>* outputs) {
+               MetaStats& st, bool groups, std::size_t copy_bytes,
+               std::vector<QemPieceMesh>* outputs) {
   st.piece_cost_bound = -1;
   st.merge_cost_cap = -1;
   if (options.max_error > 0 || pieces.empty()) return;
   const auto t0 = std::chrono::steady_clock::now();
   const std::size_t n = pieces.size();
   const std::size_t m = std::min(n, std::max(kPilotLeast, (n + kPilotEvery - 1) / kPilotEvery));
-  std::vector<PilotCurve> curves(m);
-  std::vector<PieceReport> reports(m);
+  // The pilot's pieces: m spread over the DEM (they find the bound), then with several groups
+  // those most of whose vertices lie beside voids (they tell the groups' estimates what such
+  // pieces keep).
+  std::vector<std::size_t> which(m);
+  for (std::size_t j = 0; j < m; ++j) which[j] = (2 * j + 1) * n / (2 * m);
+  if (groups) {
+    std::vector<std::size_t> rough;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (static_cast<double>(pieces[i].outline) >=
+              kPilotOutlineShare * static_cast<double>(pieces[i].vertices) &&
+          std::find(which.begin(), which.end(), i) == which.end())
+        rough.push_back(i);
+    }
+    auto share_of = [&](std::size_t i) {
+      return static_cast<double>(pieces[i].outline) /
+             static_cast<double>(std::max<std::size_t>(1, pieces[i].vertices));
+    };
+    std::stable_sort(rough.begin(), rough.end(),
+                     [&](std::size_t x, std::size_t y) { return share_of(x) > share_of(y); });
+    rough.resize(std::min(rough.size(), kPilotOutline));
+    which.insert(which.end(), rough.begin(), rough.end());
+  }
+  const std::size_t all = which.size();
+  std::vector<PilotCurve> curves(all);
+  std::vector<PieceReport> reports(all);
   const double fraction = qem_fraction(st);
   const Positions positions(dem);
-  SharedProgress shared(progress, m);
-  auto piece_of = [&](std::size_t j) { return (2 * j + 1) * n / (2 * m); };
+  SharedProgress shared(progress, all);
   // Which pieces' collapses are copied: the first while they fit copy_bytes together.
-  std::vector<char> copy(m, 0);
-  for (std::size_t j = 0, left = copy_bytes; outputs && j < std::min(m, kPilotCopies); ++j) {
-    const std::size_t bytes = core::piece_bytes(pieces[piece_of(j)], 1);
-    if (bytes > left) break;
+  std::vector<char> copy(all, 0);
+  for (std::size_t j = 0, left = copy_bytes; outputs && j < all; ++j) {
+    const std::size_t bytes = core::piece_bytes(pieces[which[j]], 1);
+    if (bytes > left || (j < m && j >= kPilotCopies)) continue;
     copy[j] = 1;
     left -= bytes;
   }
-  tbb::parallel_for(std::size_t{0}, m, [&](std::size_t j) {
+  tbb::parallel_for(std::size_t{0}, all, [&](std::size_t j) {
     shared.check();
     // Progress: the pilot's pieces done (stage "pilot"), asked within each too (a stop).
     // note: j by value: a copy of the collapse (and its progress) goes on after this task.
-    pilot_piece(dem, positions, pieces[piece_of(j)], fraction, options, reports[j],
+    pilot_piece(dem, positions, pieces[which[j]], fraction, options, reports[j],
                 [&shared, j](double, std::string_view) { return shared.update(j, 0.0, "pilot"); },
                 copy[j] != 0, curves[j]);
     if (!curves[j].resume) shared.update(j, 1.0, "pilot");
   });
   shared.check();
-  // The bound: kept_at falls as it grows; the largest of the costs noted that keeps `want`.
+  // The bound, from the spread (the first m): kept_at falls as it grows; the largest of the
+  // costs noted that keeps `want`.
+  // note: a piece that keeps more than its count by size whatever a collapse may cost (the
+  // outline round its voids: the least it came to) asks that much: its excess once made the
+  // others' share of `want`, and a spread holding one piece of scattered voids found no bound
+  // (the pieces then kept their counts by size, a rough one collapsing at any cost).
   std::size_t want = 0;
   std::vector<double> costs;
-  for (const PilotCurve& c : curves) {
-    want += c.keep;
+  for (std::size_t j = 0; j < m; ++j) {
+    const PilotCurve& c = curves[j];
+    want += std::max(c.keep, c.left.empty() ? c.most : c.left.back());
     costs.insert(costs.end(), c.cost.begin(), c.cost.end());
   }
   std::sort(costs.begin(), costs.end());
@@ -1133,13 +1224,14 @@ void run_pilot(const core::RasterSource& dem, const QemEngineOptions& options,
   // least kPieceLeast x it (where the merge of the whole DEM would take them, about).
   auto kept = [&](double bound, bool floored) {
     std::size_t k = 0;
-    for (const PilotCurve& c : curves) {
+    for (std::size_t j = 0; j < m; ++j) {
+      const PilotCurve& c = curves[j];
       if (c.vertices) k += c.kept_at(bound, floored ? c.share : c.least);
     }
     return k;
   };
   std::size_t share = 0;  // their shares alone (1 x, not slack x)
-  for (const PilotCurve& c : curves) share += c.share;
+  for (std::size_t j = 0; j < m; ++j) share += curves[j].share;
   // The largest cost noted at which they keep at least `count` (0: none does).
   auto bound_for = [&](std::size_t count, bool floored) {
     std::size_t lo = 0, hi = costs.size();  // costs[< lo] keep enough; costs[>= hi] do not
@@ -1157,21 +1249,44 @@ void run_pilot(const core::RasterSource& dem, const QemEngineOptions& options,
   // all cost 0) or the largest still keeps enough (near 100 %: the shares are all there is):
   // the pieces keep their counts by size, as before the pilot.
   const std::size_t at = bound_for(want, true);
-  st.pilot_pieces = m;
+  st.pilot_pieces = all;
   if (at > 0 && at < costs.size()) {
     st.piece_cost_bound = costs[at - 1];
     // The merge's cap: kMergeCostCap x the cost at which they would keep their shares alone,
     // unfloored (where the merge of the whole DEM would stop, about).
     const std::size_t end = bound_for(share, false);
     if (end > 0 && costs[end - 1] > 0) st.merge_cost_cap = kMergeCostCap * costs[end - 1];
-    double vertices = 0;
-    for (const PilotCurve& c : curves) vertices += static_cast<double>(c.vertices);
-    st.pilot_kept_per_vertex =
-        static_cast<double>(kept(st.piece_cost_bound, true)) / std::max(1.0, vertices);
+    std::vector<double> kept_by(all), inner(all), outline(all);
+    for (std::size_t j = 0; j < all; ++j) {
+      const PilotCurve& c = curves[j];
+      // note: a piece's window holds the next pieces' first column and row: its count by its
+      // own vertices.
+      const double own = static_cast<double>(pieces[which[j]].vertices);
+      kept_by[j] = c.vertices ? static_cast<double>(c.kept_at(st.piece_cost_bound, c.share)) *
+                                    own / static_cast<double>(c.vertices)
+                              : 0;
+      outline[j] = static_cast<double>(std::min(pieces[which[j]].outline, pieces[which[j]].vertices));
+      inner[j] = own - outline[j];
+    }
+    const KeptModel fit = fit_kept(kept_by, inner, outline);
+    st.pilot_kept_per_inner = fit.inner;
+    st.pilot_kept_per_outline = fit.outline;
+    // Of those, the vertices no collapse removes: where a piece's curve stopped above its
+    // least, that count (its voids' outlines), per vertex beside a void.
+    double forced = 0, beside = 0;
+    for (std::size_t j = 0; j < all; ++j) {
+      const PilotCurve& c = curves[j];
+      const std::size_t least = c.left.empty() ? c.most : c.left.back();
+      if (c.vertices && least > c.least)
+        forced += static_cast<double>(least) * (inner[j] + outline[j]) /
+                  static_cast<double>(c.vertices);
+      beside += outline[j];
+    }
+    st.pilot_forced_per_outline = beside > 0 ? std::clamp(forced / beside, 0.0, 1.0) : 0.0;
   }
   // The pieces whose copies made no collapse over the bound: on from there to their outputs.
   if (outputs) outputs->resize(n);
-  tbb::parallel_for(std::size_t{0}, m, [&](std::size_t j) {
+  tbb::parallel_for(std::size_t{0}, all, [&](std::size_t j) {
     PilotCurve& c = curves[j];
     if (!c.resume) return;
     shared.check();
@@ -1184,7 +1299,7 @@ void run_pilot(const core::RasterSource& dem, const QemEngineOptions& options,
       } else {
         resume.collapse(c.keep, kAnyCost);
       }
-      const std::size_t i = piece_of(j);
+      const std::size_t i = which[j];
       PieceReport& report = st.pieces[i];
       report.read_s = reports[j].read_s;
       (*outputs)[i] = c.piece->finish(std::move(resume), report, nullptr);
@@ -1195,7 +1310,7 @@ void run_pilot(const core::RasterSource& dem, const QemEngineOptions& options,
     shared.update(j, 1.0, "pilot");
   });
   shared.check();
-  for (std::size_t j = 0; j < m; ++j) st.pilot_finished += st.pieces[piece_of(j)].by_pilot;
+  for (const std::size_t i : which) st.pilot_finished += st.pieces[i].by_pilot;
   st.pilot_s = seconds_since(t0);
 }
 
@@ -1229,7 +1344,8 @@ std::vector<core::Piece> plan_qem(const core::RasterSource& dem, const QemEngine
   // most a tile, and no more than the check leaves of the limit.
   const std::size_t limit = options.memory_limit_bytes;
   const std::size_t copies = std::min(bytes, limit == 0 ? bytes : limit - need);
-  run_pilot(dem, options, pieces, progress, st, outputs ? copies : 0, outputs);
+  run_pilot(dem, options, pieces, progress, st, groups.size() > 2, outputs ? copies : 0,
+            outputs);
   return pieces;
 }
 

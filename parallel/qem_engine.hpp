@@ -34,8 +34,10 @@
 // window shares locked. Then every vertex more than a few edges from those is final: it is written
 // to the output with the faces whose corners are all final, and leaves the merge. The band left
 // open lets the next group simplify the seam between them with the vertices around it; across
-// groups the target is shared by what the pieces kept (the later ones' by the pilot's mean),
-// within one it follows the cost order. With a vertical bound
+// groups the target is shared by what the pieces kept (the later ones' estimated from their
+// vertices beside voids and the rest, at rates fitted over the pilot's pieces, which with
+// several groups include the pieces most beside voids), the vertices no collapse removes (the
+// outlines round voids, estimated too) set apart first; within one it follows the cost order. With a vertical bound
 // (--max-error) every new triangle is tested against the valid cell centres it covers: in a piece
 // from its window, in the merge from the DEM read again block by block through a cache of at most
 // one tile. Pieces are simplified independently and merged in k-d order, so the output does not

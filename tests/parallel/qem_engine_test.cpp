@@ -196,6 +196,43 @@ TEST_CASE("qem's piece engine keeps hills beside voids whose outlines fill a pie
   CHECK(pieces.second < 2.0 * whole.second);
 }
 
+TEST_CASE("qem's groups share the target by what their pieces keep, voids' outlines counted",
+          "[parallel][qem]") {
+  test::TempDir dir;
+  const std::string path = (dir / "sea.tif").string();
+  // Hills, and east of them (the last pieces in k-d order) a sea of voids scattered among
+  // cells at 0 m (a third of its cells): a piece of it keeps several times what a piece of
+  // hills does, all outline.
+  const int w = 240, h = 120;
+  const core::HeightGrid grid = test::make_grid(w, h, [](int c, int r) {
+    if (c >= 210) {
+      const std::uint32_t hash = (static_cast<std::uint32_t>(c) * 73856093u) ^
+                                 (static_cast<std::uint32_t>(r) * 19349663u);
+      return (hash >> 7) % 3 == 0 ? std::nan("") : 0.0;
+    }
+    return 100.0 + 40.0 * std::sin(c * 0.11) * std::cos(r * 0.13) + 0.05 * c;
+  });
+  GDALAllRegister();
+  test::write_geotiff(path, grid, {500000, 30, 0, 4100000, 0, -30}, "");
+  const io::DemInfo info = io::open_dem(path, {});
+  const std::size_t keep = 3000;
+  par::QemEngineOptions o = options(keep, std::size_t{64} << 10);
+  o.tile_bytes = std::size_t{1} << 20;
+  par::MetaStats stats;
+  const core::TriMesh m = par::simplify_qem(io::GdalRaster(info), o, nullptr, &stats);
+  INFO("groups " << stats.merge_groups << ", kept per inner vertex "
+                 << stats.pilot_kept_per_inner << ", per outline vertex "
+                 << stats.pilot_kept_per_outline << ", forced " << stats.pilot_forced_per_outline
+                 << "; kept " << m.vertex_count());
+  REQUIRE(stats.merge_groups > 3);
+  CHECK(stats.piece_cost_bound >= 0);
+  CHECK(stats.pilot_kept_per_outline > 2 * stats.pilot_kept_per_inner);
+  CHECK(stats.pilot_forced_per_outline > 0);
+  // The target reached: the sea's groups were asked what their outlines hold, the others the
+  // rest (shared by the count of all kept: 3,203).
+  CHECK(m.vertex_count() <= keep + keep / 100);
+}
+
 TEST_CASE("qem's pilot finishes its pieces as the pieces' stage would", "[parallel][qem]") {
   Fixture fx(false);
   const std::size_t merge_bytes = GENERATE(std::size_t{64} << 10, std::size_t{1} << 30);
