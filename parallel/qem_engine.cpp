@@ -416,6 +416,8 @@ struct PilotCurve {
   std::unique_ptr<PieceCollapse> piece;  // with resume
   std::optional<core::QemCollapse> resume;
   double resume_cost = 0;
+  // The fewest vertices it came to (at the pilot's end).
+  std::size_t fewest() const { return left.empty() ? most : left.back(); }
   // What the piece keeps with collapses past `most` bounded by `bound`, at least `floor`.
   std::size_t kept_at(double bound, std::size_t floor) const {
     std::size_t k = most;
@@ -600,8 +602,7 @@ class QemSweep {
     forced_per_outline_ = st.piece_cost_bound >= 0 ? st.pilot_forced_per_outline : 0.0;
     for (std::size_t i = 0; i < pieces.size(); ++i) {
       outline_[i] = static_cast<double>(std::min(pieces[i].outline, pieces[i].vertices));
-      const double v = static_cast<double>(pieces[i].vertices);
-      const double o = static_cast<double>(std::min(pieces[i].outline, pieces[i].vertices));
+      const double v = static_cast<double>(pieces[i].vertices), o = outline_[i];
       weight_[i] = st.piece_cost_bound >= 0
                        ? (v - o) * st.pilot_kept_per_inner + o * st.pilot_kept_per_outline
                        : v;
@@ -1215,7 +1216,7 @@ void run_pilot(const core::RasterSource& dem, const QemEngineOptions& options,
   std::vector<double> costs;
   for (std::size_t j = 0; j < m; ++j) {
     const PilotCurve& c = curves[j];
-    want += std::max(c.keep, c.left.empty() ? c.most : c.left.back());
+    want += std::max(c.keep, c.fewest());
     costs.insert(costs.end(), c.cost.begin(), c.cost.end());
   }
   std::sort(costs.begin(), costs.end());
@@ -1276,9 +1277,8 @@ void run_pilot(const core::RasterSource& dem, const QemEngineOptions& options,
     double forced = 0, beside = 0;
     for (std::size_t j = 0; j < all; ++j) {
       const PilotCurve& c = curves[j];
-      const std::size_t least = c.left.empty() ? c.most : c.left.back();
-      if (c.vertices && least > c.least)
-        forced += static_cast<double>(least) * (inner[j] + outline[j]) /
+      if (c.vertices && c.fewest() > c.least)
+        forced += static_cast<double>(c.fewest()) * (inner[j] + outline[j]) /
                   static_cast<double>(c.vertices);
       beside += outline[j];
     }
