@@ -135,6 +135,7 @@ void run_pieces(const io::DemInfo& dem, const SimplifyRequest& r, const core::Pr
   out.target_vertices = stats.target_vertices;
   out.kept_vertices = stats.kept_vertices;
   out.absurd_note = io::absurd_heights_note(dem, stats.absurd_cells);
+  out.usual_nodata_note = io::usual_nodata_note(dem, stats.usual_nodata_cells);
 }
 
 }  // namespace
@@ -155,6 +156,9 @@ Simplification simplify(io::DemInfo dem, const std::string& input, const Simplif
     case par::Algorithm::qem:
       run_pieces(dem, request, progress, out);
       out.dem = std::move(dem);
+      // note: the count pass finds them (a whole-DEM read notes them itself): in the report
+      // too, where a batch's user reads them.
+      if (!out.usual_nodata_note.empty()) out.dem.notes.push_back(out.usual_nodata_note);
       break;
   }
   // note: the TIN is built in a local affine frame; a projection far from affine could fold a

@@ -495,9 +495,12 @@ int run(const Options& o) {
   std::optional<io::AtomicOutputFile> error_map_out, hillshade_out;
   // Which band of several is measured, as dpts-par says which it simplified: said once the
   // measure is made (a failure before is its one line alone).
-  std::string bands_note;
+  // So are the DEM's warnings (heights read as no-data, usual no-data values read as heights):
+  // a measure against voids read as pits is no measure of the TIN.
+  std::vector<std::string> dem_notes;
   const std::unique_ptr<api::Evaluation> ev = api::load(request, [&](const io::Dem& dem) {
-    bands_note = dem.bands_note;
+    if (!dem.bands_note.empty()) dem_notes.push_back(dem.bands_note);
+    dem_notes.insert(dem_notes.end(), dem.height_warnings.begin(), dem.height_warnings.end());
     // Nor may an output overwrite any file of the DEM's dataset (an ENVI .hdr, a VRT's
     // source, the zip behind /vsizip/).
     for (const auto& [flag, path] :
@@ -543,7 +546,8 @@ int run(const Options& o) {
     ev->options.keep_pairs = true;
   }
   api::measure(*ev, request, progress);
-  if (!bands_note.empty() && !o.quiet) std::cerr << "dpts-eval: " << bands_note << "\n";
+  if (!o.quiet)
+    for (const std::string& note : dem_notes) std::cerr << "dpts-eval: " << note << "\n";
   const par::EvalResult& r = ev->result;
   const double secs =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

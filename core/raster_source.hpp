@@ -4,6 +4,7 @@
 // reads (io::GdalRaster), and MemoryRaster below holds a grid in memory (tests, benchmarks).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -16,6 +17,14 @@
 #include "core/steiner_graph.hpp"
 
 namespace dpts::core {
+
+// Values rasters commonly store for no-data (ESRI's -9999, SRTM's -32768, the 16-bit types'
+// extremes, ...), as stored (before a band's scale and offset). A band without a no-data value
+// holding them has most likely lost its tag: its voids then read as pits or towers kilometres
+// deep or high, which no height check can tell from terrain, so they are counted and said.
+inline constexpr std::array<double, 6> kUsualNoData = {-9999.0, -32768.0, -32767.0,
+                                                         -99999.0, 32767.0, 65535.0};
+using UsualNoDataCounts = std::array<std::size_t, kUsualNoData.size()>;
 
 // One object per input, shared by every task of a run: all members are safe to call from
 // concurrent tasks.
@@ -36,9 +45,12 @@ class RasterSource {
 
   // Cells read as no-data because their height was implausible (see io::kMaxAbsHeight),
   // counted for rows [row0, row1) only (a streaming pass's overlapping strips count once).
+  // Also, in a band without a no-data value, the cells holding each of kUsualNoData (read as
+  // heights, as the band says).
   struct Implausible {
     int row0 = 0, row1 = std::numeric_limits<int>::max();
     std::size_t cells = 0;
+    UsualNoDataCounts usual{};
   };
   // Heights of columns [col0, col0 + width) and rows [row0, row0 + height), inside the raster;
   // NaN for no-data (the band's value, its mask, NaN, infinite and implausible heights).

@@ -729,9 +729,22 @@ core::HeightGrid WindowReader::read(int col0, int row0, int width, int height,
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const bool f32 = info_.float32;
   const double nd = info_.nodata, scale = info_.scale, offset = info_.offset;
+  // Rows [first, last) of the grid are those counted (count_rows).
+  const std::size_t w = static_cast<std::size_t>(width);
+  const std::size_t first =
+      w * static_cast<std::size_t>(std::clamp(count_row0_ - row0, 0, height));
+  const std::size_t last =
+      w * static_cast<std::size_t>(std::clamp(count_row1_ - row0, 0, height));
   for (std::size_t i = 0; i < grid.z.size(); ++i) {
     double& z = grid.z[i];
     if (info_.signed_byte && z > 127) z -= 256;
+    // note: a band without a no-data value: its cells holding a usual one are heights as the
+    // band says, counted for a warning (a pit 9999 m deep where a void lost its tag).
+    if (!info_.has_nodata && (z <= -9999.0 || z >= 32767.0) && i >= first && i < last) {
+      for (std::size_t k = 0; k < core::kUsualNoData.size(); ++k) {
+        if (z == core::kUsualNoData[k]) ++usual_[k];
+      }
+    }
     const bool is_nodata =
         info_.has_nodata && (f32 ? static_cast<float>(z) == static_cast<float>(nd) : z == nd);
     // note: NaN is a no-data of its own (float DEMs' usual one); an infinite height is not,
@@ -780,6 +793,25 @@ std::string absurd_heights_note(const DemInfo& dem, std::size_t count) {
          " cells with heights beyond +-1e7 read as no-data";
 }
 
+std::string usual_nodata_note(const DemInfo& dem, const core::UsualNoDataCounts& counts) {
+  std::size_t total = 0, most = 0;
+  for (std::size_t k = 0; k < counts.size(); ++k) {
+    total += counts[k];
+    if (counts[k] > counts[most]) most = k;
+  }
+  if (total == 0) return "";
+  char value[32];
+  std::snprintf(value, sizeof value, "%.17g", core::kUsualNoData[most]);
+  const std::string others =
+      total > counts[most] ? " (" + std::to_string(total - counts[most]) + " more hold another)"
+                           : "";
+  return "warning: " + dem.path + ": " + std::to_string(counts[most]) + " cells hold " + value +
+         others + ", a usual no-data value, but band " + std::to_string(dem.band) +
+         " has none: read as heights; if they are voids, give the band its no-data value "
+         "(gdal_translate -a_nodata " +
+         value + " IN OUT)";
+}
+
 std::string all_nodata_message(const DemInfo& dem, std::size_t absurd_cells) {
   char nodata[48] = "";
   if (dem.has_nodata) std::snprintf(nodata, sizeof nodata, " (no-data value %.17g)", dem.nodata);
@@ -813,9 +845,14 @@ core::HeightGrid GdalRaster::read(int col0, int row0, int width, int height,
                                   Implausible* implausible) const {
   std::lock_guard<std::mutex> hold(lock_);
   const std::size_t before = reader_.absurd_cells();
+  const core::UsualNoDataCounts usual_before = reader_.usual_nodata_cells();
   if (implausible) reader_.count_rows(implausible->row0, implausible->row1);
   core::HeightGrid g = reader_.read(col0, row0, width, height);
-  if (implausible) implausible->cells += reader_.absurd_cells() - before;
+  if (implausible) {
+    implausible->cells += reader_.absurd_cells() - before;
+    for (std::size_t k = 0; k < usual_before.size(); ++k)
+      implausible->usual[k] += reader_.usual_nodata_cells()[k] - usual_before[k];
+  }
   return g;
 }
 
@@ -836,7 +873,10 @@ Dem read_dem(DemInfo info, const core::Progress& progress) {
   dem.grid = reader.read(0, 0, dem.width, dem.height, progress);
   for (double z : dem.grid.z) dem.valid_cells += std::isnan(z) ? 0 : 1;
   if (reader.absurd_cells() > 0)
-    dem.notes.push_back(absurd_heights_note(dem, reader.absurd_cells()));
+    dem.height_warnings.push_back(absurd_heights_note(dem, reader.absurd_cells()));
+  const std::string usual = usual_nodata_note(dem, reader.usual_nodata_cells());
+  if (!usual.empty()) dem.height_warnings.push_back(usual);
+  dem.notes.insert(dem.notes.end(), dem.height_warnings.begin(), dem.height_warnings.end());
   if (dem.valid_cells == 0) throw InputError(all_nodata_message(dem, reader.absurd_cells()));
   return dem;
 }

@@ -137,6 +137,9 @@ struct DemInfo {
 struct Dem : DemInfo {
   core::HeightGrid grid;
   std::size_t valid_cells = 0;
+  // Warnings of the heights read (absurd ones read as no-data, usual no-data values read as
+  // heights; also in notes): a measure against such cells is told of them.
+  std::vector<std::string> height_warnings;
 
   // The DEM's full-resolution grid TIN (core::grid_tin with the frame's Delaunay diagonal: the
   // TIN the elimination starts from) in the output CRS, faces counter-clockwise; vertices in
@@ -173,12 +176,16 @@ class WindowReader {
   // rows in [row0, row1) as set by count_rows (all rows by default: windows read twice count
   // twice; a streaming pass with overlapping strips narrows the rows to each strip's own).
   std::size_t absurd_cells() const { return absurd_; }
+  // In a band without a no-data value: the cells read so far (in the same rows) holding each of
+  // core::kUsualNoData.
+  const core::UsualNoDataCounts& usual_nodata_cells() const { return usual_; }
   void count_rows(int row0, int row1) { count_row0_ = row0, count_row1_ = row1; }
 
  private:
   const DemInfo& info_;
   void* dataset_;  // GDALDataset*
   std::size_t absurd_ = 0;
+  core::UsualNoDataCounts usual_{};
   int count_row0_ = 0, count_row1_ = std::numeric_limits<int>::max();
 };
 
@@ -221,6 +228,10 @@ class GdalRaster final : public core::RasterSource {
 
 // A warning for `count` cells read as no-data because of absurd heights ("" when none).
 std::string absurd_heights_note(const DemInfo& dem, std::size_t count);
+
+// A warning for cells of a band without a no-data value holding usual no-data values (counts per
+// core::kUsualNoData; "" when none): read as heights, maybe voids that lost their tag.
+std::string usual_nodata_note(const DemInfo& dem, const core::UsualNoDataCounts& counts);
 
 // The message for a DEM whose band has no valid cell, naming the file and the band, and how
 // many cells held heights beyond +-1e7 (read as no-data), if any.

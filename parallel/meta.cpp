@@ -40,7 +40,7 @@ std::uint64_t piece_seed(std::uint64_t seed, std::size_t piece) {
 // One streaming pass over the raster in strips of whole rows: surface vertices per block.
 core::BlockCounts count_blocks(const core::RasterSource& dem, std::size_t strip_bytes,
                                const core::Progress& progress, std::size_t* valid_cells,
-                               std::size_t* absurd_cells) {
+                               std::size_t* absurd_cells, core::UsualNoDataCounts* usual) {
   core::BlockCounts bc;
   bc.width = dem.width();
   bc.height = dem.height();
@@ -66,6 +66,7 @@ core::BlockCounts count_blocks(const core::RasterSource& dem, std::size_t strip_
   const int strips = (dem.height() + strip - 1) / strip;
   std::vector<std::size_t> valid_of(static_cast<std::size_t>(strips), 0),
       absurd_of(static_cast<std::size_t>(strips), 0);
+  std::vector<core::UsualNoDataCounts> usual_of(static_cast<std::size_t>(strips));
   // Counts rows [r0, r1) of strip k from the rows [a, b) that hold them.
   auto count_strip = [&](std::size_t k, int a, int b, int r0, int r1) {
     core::RasterSource::Implausible implausible;
@@ -73,6 +74,7 @@ core::BlockCounts count_blocks(const core::RasterSource& dem, std::size_t strip_
     implausible.row1 = r1;
     const core::HeightGrid g = dem.read(0, a, dem.width(), b - a, &implausible);
     absurd_of[k] = implausible.cells;
+    usual_of[k] = implausible.usual;
     std::size_t valid = 0;
     const auto own_end = g.z.begin() + static_cast<std::ptrdiff_t>(g.index(0, r1 - a));
     for (auto z = g.z.begin() + static_cast<std::ptrdiff_t>(g.index(0, r0 - a)); z != own_end;
@@ -137,6 +139,7 @@ core::BlockCounts count_blocks(const core::RasterSource& dem, std::size_t strip_
   for (std::size_t k = 0; k < valid_of.size(); ++k) {
     *valid_cells += valid_of[k];
     absurd += absurd_of[k];
+    for (std::size_t v = 0; v < usual->size(); ++v) (*usual)[v] += usual_of[k][v];
   }
   *absurd_cells = absurd;
   return bc;
@@ -347,7 +350,8 @@ std::vector<core::Piece> divide_dem(const core::RasterSource& dem, const KeepTar
                                     std::size_t max_vertices) {
   auto t0 = std::chrono::steady_clock::now();
   const core::BlockCounts bc = count_blocks(dem, std::max<std::size_t>(tile_bytes / 4, 1 << 20),
-                                            progress, &st.valid_cells, &st.absurd_cells);
+                                            progress, &st.valid_cells, &st.absurd_cells,
+                                            &st.usual_nodata_cells);
   st.block = bc.block;
   st.count_s = seconds_since(t0);
   if (st.valid_cells == 0) {

@@ -286,6 +286,22 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
      "warning: " + absurd + ": 3 cells with heights beyond +-1e7 read as no-data");
   ok("heights of 1e30 (vp-meta)", {"--algo", "vp-meta", absurd, out},
      "warning: " + absurd + ": 3 cells with heights beyond +-1e7 read as no-data");
+  // Voids that lost their no-data tag: heights as the band says, and said, by either engine.
+  const std::string untagged = raster("untagged.tif", 20, 15, [](int c, int r) {
+    return r == 4 && c > 2 && c < 7 ? -9999.0 : hill(c, r);
+  });
+  const std::string untagged_msg =
+      "warning: " + untagged + ": 4 cells hold -9999, a usual no-data value, but band 1 has none";
+  ok("-9999 cells in a band without no-data (said)", {untagged, out}, untagged_msg);
+  ok("-9999 cells in a band without no-data (vp)", {"--algo", "vp", untagged, out},
+     untagged_msg);
+  RasterSpec int16;
+  int16.type = "Int16";
+  const std::string srtm = raster("srtm_voids.tif", 20, 15, [](int c, int r) {
+    return c == 0 && r < 2 ? -32768.0 : 100.0 + c + r;
+  }, int16);
+  ok("Int16 -32768 cells without no-data (said)", {srtm, out},
+     "warning: " + srtm + ": 2 cells hold -32768, a usual no-data value, but band 1 has none");
   for (const char* type : {"Byte", "UInt16", "Int16", "UInt32", "Int32", "UInt64", "Int64",
                            "Float32", "Float64"}) {
     RasterSpec t;

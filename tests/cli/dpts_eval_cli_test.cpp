@@ -155,6 +155,29 @@ TEST_CASE("dpts-eval measures the band dpts-par simplified (--band), and names t
   CHECK(no_mesh.err == "dpts-eval: error: " + missing + ": no such file\n");
 }
 
+TEST_CASE("dpts-eval says the DEM's warnings: voids that lost their no-data tag", "[cli][eval]") {
+  // A -9999 void without a no-data tag is a pit 9999 m deep in T: the measure is of the pit,
+  // and the user is told, as dpts-par tells its own.
+  test::TempDir dir;
+  const auto dem = (dir / "untagged.tif").string(), mesh = (dir / "m.ply").string();
+  test::RasterSpec spec;
+  spec.geotransform = {400000, 10, 0, 3800000, 0, -10};
+  spec.wkt = test::epsg_wkt(32611);
+  test::write_raster(dem, test::make_grid(30, 20, [](int c, int r) {
+                       return c == 4 && r == 4 ? -9999.0 : 300.0 + 2.0 * c + r;
+                     }), spec);
+  const std::string warning = "warning: " + dem + ": 1 cells hold -9999, a usual no-data value";
+  const auto par = test::run(kPar, {dem, mesh});
+  REQUIRE(par.exit_code == 0);
+  CHECK(par.err.find("dpts-par: " + warning) != std::string::npos);
+  const auto r = test::run(kEval, {"--dem", dem, "--mesh", mesh, "--points", "6", "--sets", "1"});
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.err.find("dpts-eval: " + warning) != std::string::npos);
+  CHECK(test::run(kEval, {"--quiet", "--dem", dem, "--mesh", mesh, "--points", "6", "--sets", "1"})
+            .err.empty());
+}
+
 TEST_CASE("dpts-eval reports every figure in one JSON line", "[cli][eval]") {
   Fixture fx;
   const auto mesh = (fx.dir / "m.ply").string();

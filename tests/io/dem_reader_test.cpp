@@ -173,6 +173,41 @@ TEST_CASE("another band, absurd and non-finite heights", "[io][dem]") {
         std::string::npos);
 }
 
+TEST_CASE("usual no-data values in a band without one are heights, and said", "[io][dem]") {
+  // A void that lost its tag reads as a pit 9999 m deep: kept (the band says it is a height),
+  // counted per value, and the note names the commonest and how to tag it.
+  GDALAllRegister();
+  test::TempDir dir;
+  const auto g = test::make_grid(6, 5, [](int c, int r) {
+    if (r == 2 && c < 3) return -9999.0;
+    if (r == 4 && c == 5) return -32768.0;
+    return 100.0 + c + r;
+  });
+  test::write_raster(dir / "untagged.tif", g, {});
+  const io::Dem dem = io::read_dem((dir / "untagged.tif").string(), {}, nullptr);
+  CHECK(dem.valid_cells == 30);
+  CHECK(zat(dem.grid, 1, 2) == -9999.0);
+  REQUIRE_FALSE(dem.notes.empty());
+  CHECK(dem.notes.back() == "warning: " + (dir / "untagged.tif").string() +
+                                ": 3 cells hold -9999 (1 more hold another), a usual no-data "
+                                "value, but band 1 has none: read as heights; if they are voids, "
+                                "give the band its no-data value (gdal_translate -a_nodata -9999 "
+                                "IN OUT)");
+  // Tagged, the same cells are no-data and nothing is said of them.
+  test::RasterSpec tagged;
+  tagged.has_nodata = true;
+  tagged.nodata = -9999;
+  test::write_raster(dir / "tagged.tif", g, tagged);
+  const io::Dem t = io::read_dem((dir / "tagged.tif").string(), {}, nullptr);
+  CHECK(t.valid_cells == 27);
+  for (const auto& note : t.notes) CHECK(note.find("usual no-data") == std::string::npos);
+  // Heights near but not at those values say nothing.
+  const auto deep = test::make_grid(6, 5, [](int c, int r) { return -9998.5 - c - r; });
+  test::write_raster(dir / "deep.tif", deep, {});
+  for (const auto& note : io::read_dem((dir / "deep.tif").string(), {}, nullptr).notes)
+    CHECK(note.find("usual no-data") == std::string::npos);
+}
+
 TEST_CASE("a DEM replaced or rewritten after it was opened fails the next window read",
           "[io][dem][robust]") {
   // The piece engines read windows through handles of their own: a file replaced mid-run
