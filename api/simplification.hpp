@@ -59,7 +59,7 @@ struct Simplification {
   bool piece_engine = false;
   std::size_t rejected_folds = 0;  // qslim: collapses refused (fold or link condition)
   std::string absurd_note;         // implausible heights read as no-data, or empty
-  std::string usual_nodata_note;   // usual no-data values in a band without one, or empty
+  std::string usual_nodata_note;   // usual no-data values not the band's, or empty
 };
 
 // Runs request.algo on the DEM (`input`: its name in messages). Whole-DEM methods (vp, pld,

@@ -134,7 +134,7 @@ Batch mode: dpts-par --batch LIST|DIR --out-dir OUT [--jobs N] [options]
 
 Every valid cell centre is a vertex; no-data, NaN, infinite and absurd (beyond +-1e7)
 heights are not, and no face covers a void or leaves the valid data (-9999, -32768 and
-other usual no-data values in a band without one are heights, with a warning). Heights are
+other usual no-data values not the band's are heights, with a warning). Heights are
 the band's values with its scale and offset applied; any real cell type is read. Output:
 vertex x y z (double, output CRS), faces counter-clockwise seen from above, the CRS as
 WKT in a header comment (PLY, OBJ) or in the layer (GeoPackage; STL has none). The output

@@ -19,9 +19,10 @@
 namespace dpts::core {
 
 // Values rasters commonly store for no-data (ESRI's -9999, SRTM's -32768, the 16-bit types'
-// extremes, ...), as stored (before a band's scale and offset). A band without a no-data value
-// holding them has most likely lost its tag: its voids then read as pits or towers kilometres
-// deep or high, which no height check can tell from terrain, so they are counted and said.
+// extremes, ...), as stored (before a band's scale and offset). Cells holding them in a band
+// without a no-data value (or with another) are most likely voids that lost their tag: they read
+// as pits or towers kilometres deep or high, which no height check can tell from terrain, so
+// they are counted and said.
 inline constexpr std::array<double, 6> kUsualNoData = {-9999.0, -32768.0, -32767.0,
                                                          -99999.0, 32767.0, 65535.0};
 using UsualNoDataCounts = std::array<std::size_t, kUsualNoData.size()>;
@@ -45,7 +46,7 @@ class RasterSource {
 
   // Cells read as no-data because their height was implausible (see io::kMaxAbsHeight),
   // counted for rows [row0, row1) only (a streaming pass's overlapping strips count once).
-  // Also, in a band without a no-data value, the cells holding each of kUsualNoData (read as
+  // Also the cells holding each of kUsualNoData other than the band's no-data value (read as
   // heights, as the band says).
   struct Implausible {
     int row0 = 0, row1 = std::numeric_limits<int>::max();

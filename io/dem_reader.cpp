@@ -738,15 +738,16 @@ core::HeightGrid WindowReader::read(int col0, int row0, int width, int height,
   for (std::size_t i = 0; i < grid.z.size(); ++i) {
     double& z = grid.z[i];
     if (info_.signed_byte && z > 127) z -= 256;
-    // note: a band without a no-data value: its cells holding a usual one are heights as the
-    // band says, counted for a warning (a pit 9999 m deep where a void lost its tag).
-    if (!info_.has_nodata && (z <= -9999.0 || z >= 32767.0) && i >= first && i < last) {
+    const bool is_nodata =
+        info_.has_nodata && (f32 ? static_cast<float>(z) == static_cast<float>(nd) : z == nd);
+    // note: cells holding a usual no-data value other than the band's (it has none, or another)
+    // are heights as the band says, counted for a warning (a pit 9999 m deep where a void lost
+    // its tag, or voids of -32768 under a tag of -9999).
+    if (!is_nodata && (z <= -9999.0 || z >= 32767.0) && i >= first && i < last) {
       for (std::size_t k = 0; k < core::kUsualNoData.size(); ++k) {
         if (z == core::kUsualNoData[k]) ++usual_[k];
       }
     }
-    const bool is_nodata =
-        info_.has_nodata && (f32 ? static_cast<float>(z) == static_cast<float>(nd) : z == nd);
     // note: NaN is a no-data of its own (float DEMs' usual one); an infinite height is not,
     // and is counted with the absurd ones below.
     if (is_nodata || std::isnan(z)) {
@@ -805,11 +806,19 @@ std::string usual_nodata_note(const DemInfo& dem, const core::UsualNoDataCounts&
   const std::string others =
       total > counts[most] ? " (" + std::to_string(total - counts[most]) + " more hold another)"
                            : "";
+  const std::string band = "band " + std::to_string(dem.band);
+  if (!dem.has_nodata) {
+    return "warning: " + dem.path + ": " + std::to_string(counts[most]) + " cells hold " + value +
+           others + ", a usual no-data value, but " + band +
+           " has none: read as heights; if they are voids, give the band its no-data value "
+           "(gdal_translate -a_nodata " +
+           value + " IN OUT)";
+  }
+  char tag[32];
+  std::snprintf(tag, sizeof tag, "%.17g", dem.nodata);
   return "warning: " + dem.path + ": " + std::to_string(counts[most]) + " cells hold " + value +
-         others + ", a usual no-data value, but band " + std::to_string(dem.band) +
-         " has none: read as heights; if they are voids, give the band its no-data value "
-         "(gdal_translate -a_nodata " +
-         value + " IN OUT)";
+         others + ", a usual no-data value, but " + band + "'s no-data value is " + tag +
+         ": read as heights; if they are voids, set them to " + tag;
 }
 
 std::string all_nodata_message(const DemInfo& dem, std::size_t absurd_cells) {

@@ -176,8 +176,8 @@ class WindowReader {
   // rows in [row0, row1) as set by count_rows (all rows by default: windows read twice count
   // twice; a streaming pass with overlapping strips narrows the rows to each strip's own).
   std::size_t absurd_cells() const { return absurd_; }
-  // In a band without a no-data value: the cells read so far (in the same rows) holding each of
-  // core::kUsualNoData.
+  // The cells read so far (in the same rows) holding each of core::kUsualNoData, but for the
+  // band's no-data value.
   const core::UsualNoDataCounts& usual_nodata_cells() const { return usual_; }
   void count_rows(int row0, int row1) { count_row0_ = row0, count_row1_ = row1; }
 
@@ -229,8 +229,9 @@ class GdalRaster final : public core::RasterSource {
 // A warning for `count` cells read as no-data because of absurd heights ("" when none).
 std::string absurd_heights_note(const DemInfo& dem, std::size_t count);
 
-// A warning for cells of a band without a no-data value holding usual no-data values (counts per
-// core::kUsualNoData; "" when none): read as heights, maybe voids that lost their tag.
+// A warning for cells holding usual no-data values other than the band's (it has none, or
+// another; counts per core::kUsualNoData; "" when none): read as heights, maybe voids that lost
+// their tag.
 std::string usual_nodata_note(const DemInfo& dem, const core::UsualNoDataCounts& counts);
 
 // The message for a DEM whose band has no valid cell, naming the file and the band, and how

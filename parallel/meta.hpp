@@ -50,7 +50,7 @@ struct MetaStats {
   std::size_t input_vertices = 0, target_vertices = 0, kept_vertices = 0;
   std::size_t valid_cells = 0;
   std::size_t absurd_cells = 0;  // implausible heights read as no-data (RasterSource::Implausible)
-  // Cells holding a usual no-data value in a band without one (RasterSource::Implausible).
+  // Cells holding a usual no-data value other than the band's (RasterSource::Implausible).
   core::UsualNoDataCounts usual_nodata_cells{};
   int block = 0;
   std::vector<PieceReport> pieces;

@@ -193,14 +193,28 @@ TEST_CASE("usual no-data values in a band without one are heights, and said", "[
                                 "value, but band 1 has none: read as heights; if they are voids, "
                                 "give the band its no-data value (gdal_translate -a_nodata -9999 "
                                 "IN OUT)");
-  // Tagged, the same cells are no-data and nothing is said of them.
+  // Tagged, the same cells are no-data and nothing is said of them: only of the -32768 one.
   test::RasterSpec tagged;
   tagged.has_nodata = true;
   tagged.nodata = -9999;
   test::write_raster(dir / "tagged.tif", g, tagged);
   const io::Dem t = io::read_dem((dir / "tagged.tif").string(), {}, nullptr);
   CHECK(t.valid_cells == 27);
-  for (const auto& note : t.notes) CHECK(note.find("usual no-data") == std::string::npos);
+  REQUIRE(t.height_warnings.size() == 1);
+  CHECK(t.height_warnings[0].find(": 1 cells hold -32768, a usual no-data value, but band 1's "
+                                  "no-data value is -9999") != std::string::npos);
+  // Tagged with another value, the cells not holding it are heights, and said.
+  test::RasterSpec other;
+  other.has_nodata = true;
+  other.nodata = -32768;
+  test::write_raster(dir / "other.tif", g, other);
+  const io::Dem o = io::read_dem((dir / "other.tif").string(), {}, nullptr);
+  CHECK(o.valid_cells == 29);
+  REQUIRE_FALSE(o.notes.empty());
+  CHECK(o.notes.back() == "warning: " + (dir / "other.tif").string() +
+                              ": 3 cells hold -9999, a usual no-data value, but band 1's no-data "
+                              "value is -32768: read as heights; if they are voids, set them to "
+                              "-32768");
   // Heights near but not at those values say nothing.
   const auto deep = test::make_grid(6, 5, [](int c, int r) { return -9998.5 - c - r; });
   test::write_raster(dir / "deep.tif", deep, {});
