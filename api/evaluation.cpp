@@ -162,6 +162,9 @@ std::string Evaluation::json(const EvalRequest& request, int threads, double sec
   const par::EvalOptions& eo = options;
   io::JsonArray sets;
   for (double x : r.set_errors) sets.raw(io::json_number(x));
+  // The DEM's warnings of its heights (as on stderr): a batch reads them here.
+  io::JsonArray warnings;
+  for (const std::string& w : dem.height_warnings) warnings.add(w);
   return io::JsonObject()
       .add("distance_error", r.distance_error)
       .raw("distance_error_sets", sets.str())
@@ -210,6 +213,7 @@ std::string Evaluation::json(const EvalRequest& request, int threads, double sec
       .add("threads", threads)
       .add("dem", request.dem)
       .add("mesh", request.mesh)
+      .raw("warnings", warnings.str())
       .add("seconds_geodesics_dem", r.original_s)
       .add("seconds_geodesics_mesh", r.simplified_s)
       .add("seconds", seconds)

@@ -174,8 +174,12 @@ TEST_CASE("dpts-eval says the DEM's warnings: voids that lost their no-data tag"
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
   CHECK(r.err.find("dpts-eval: " + warning) != std::string::npos);
-  CHECK(test::run(kEval, {"--quiet", "--dem", dem, "--mesh", mesh, "--points", "6", "--sets", "1"})
-            .err.empty());
+  // --quiet says nothing; --json holds the warning.
+  const auto j = test::run(kEval, {"--quiet", "--json", "--dem", dem, "--mesh", mesh, "--points",
+                                   "6", "--sets", "1"});
+  CHECK(j.err.empty());
+  const std::string warnings = io::json_field(last_line(j.out), "warnings").value_or("");
+  CHECK(warnings.rfind("[\"" + warning, 0) == 0);
 }
 
 TEST_CASE("dpts-eval reports every figure in one JSON line", "[cli][eval]") {
