@@ -46,6 +46,8 @@ struct ParOptions {
   // format's extension
   std::optional<io::MeshFormat> format_flag;
   io::MeshFormat format = io::MeshFormat::ply;
+  // Said with the input's notes: OUTPUT's extension is none of the formats' (out.tif), so PLY.
+  std::string format_note;
   bool quiet = false;
   bool help = false;
   bool version = false;

@@ -351,6 +351,7 @@ int simplify_and_write(const dpts::cli::ParOptions& o, dpts::cli::ProgressPrinte
   r.on_input = [&](const io::DemInfo& dem) {
     if (!g_report.path.empty()) g_report.input_json = cli::input_json(dem, 0, 0);
     notes = dem.notes;
+    if (!o.format_note.empty()) notes.push_back(o.format_note);
     out.emplace(o.output);  // the input is valid: now claim the output (fails early)
   };
   const core::Progress noted = [&](double f, std::string_view stage) {

@@ -286,6 +286,11 @@ std::vector<BadInput> make_bad_inputs(const std::filesystem::path& dir) {
      "warning: " + absurd + ": 3 cells with heights beyond +-1e7 read as no-data");
   ok("heights of 1e30 (vp-meta)", {"--algo", "vp-meta", absurd, out},
      "warning: " + absurd + ": 3 cells with heights beyond +-1e7 read as no-data");
+  // An OUTPUT whose extension no format has: PLY, said (a name without one says nothing).
+  const std::string tif_out = (dir / "out.tif").string();
+  cases.push_back({"OUTPUT out.tif (written as PLY, said)", {fine, tif_out}, 0,
+                   tif_out + ": written as PLY (.tif is not .ply, .obj, .stl or .gpkg; --format "
+                   "picks the format)", tif_out, 0});
   // Voids that lost their no-data tag: heights as the band says, and said, by either engine.
   const std::string untagged = raster("untagged.tif", 20, 15, [](int c, int r) {
     return r == 4 && c > 2 && c < 7 ? -9999.0 : hill(c, r);
