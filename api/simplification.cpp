@@ -63,6 +63,7 @@ void run_qslim(io::DemInfo info, const std::string& input, const SimplifyRequest
   out.kept_vertices = stats.kept_vertices;
   out.rejected_folds = stats.rejected_folds;
   dem.frame_mesh_to_output(out.mesh);
+  out.height_warnings = dem.height_warnings;
   out.dem = std::move(static_cast<io::DemInfo&>(dem));
 }
 
@@ -90,6 +91,7 @@ void run_elimination(io::DemInfo info, const std::string& input, const SimplifyR
   out.target_vertices = stats.target_vertices;
   out.kept_vertices = stats.kept_vertices;
   out.mesh = dem.output_mesh(std::move(tin), z);
+  out.height_warnings = dem.height_warnings;
   out.dem = std::move(static_cast<io::DemInfo&>(dem));
 }
 
@@ -158,7 +160,11 @@ Simplification simplify(io::DemInfo dem, const std::string& input, const Simplif
       out.dem = std::move(dem);
       // note: the count pass finds them (a whole-DEM read notes them itself): in the report
       // too, where a batch's user reads them.
-      if (!out.usual_nodata_note.empty()) out.dem.notes.push_back(out.usual_nodata_note);
+      for (const std::string* note : {&out.absurd_note, &out.usual_nodata_note}) {
+        if (note->empty()) continue;
+        out.dem.notes.push_back(*note);
+        out.height_warnings.push_back(*note);
+      }
       break;
   }
   // note: the TIN is built in a local affine frame; a projection far from affine could fold a

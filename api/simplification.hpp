@@ -60,6 +60,8 @@ struct Simplification {
   std::size_t rejected_folds = 0;  // qslim: collapses refused (fold or link condition)
   std::string absurd_note;         // implausible heights read as no-data, or empty
   std::string usual_nodata_note;   // usual no-data values not the band's, or empty
+  // The warnings of the heights read, by any method (those above, or a whole-DEM read's).
+  std::vector<std::string> height_warnings;
 };
 
 // Runs request.algo on the DEM (`input`: its name in messages). Whole-DEM methods (vp, pld,

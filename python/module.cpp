@@ -115,6 +115,8 @@ void declare_mesh(py::module_& m) {
       .def_readonly("comments", &dpts::Mesh::comments)
       .def_readonly("input_vertices", &dpts::Mesh::input_vertices,
                     "the DEM's surface vertices (valid cells in a face)")
+      .def_readonly("warnings", &dpts::Mesh::warnings,
+                    "what was read of the heights that the user should know (list of str)")
       .def(
           "write",
           [](const dpts::Mesh& mesh, const std::string& path, const std::string& format,

@@ -49,6 +49,9 @@ struct Mesh {
   std::string crs_wkt;                              // empty when the DEM had no CRS
   std::vector<std::string> comments;                // how it was made (written as comments)
   std::size_t input_vertices = 0;                   // the DEM's surface vertices
+  // What was read of the heights that the user should know: cells of absurd heights read as
+  // no-data, usual no-data values (-9999, -32768...) not the band's read as heights.
+  std::vector<std::string> warnings;
 
   std::size_t vertex_count() const { return xyz.size() / 3; }
   // Writes the mesh atomically as PLY, OBJ, STL or GeoPackage: `format` ("ply", "obj", "stl",

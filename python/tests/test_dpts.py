@@ -68,6 +68,21 @@ def test_simplify_an_array_with_its_georeferencing():
     assert np.array_equal(m2.vertices, m.vertices) and np.array_equal(m2.faces, m.faces)
 
 
+def test_usual_nodata_values_not_declared_are_heights_and_said():
+    z, gt = hills(100)
+    z[10:12, 20:30] = -9999.0  # voids that lost their no-data value
+    m = dpts.simplify(z, geotransform=gt, crs="EPSG:32611", vertices=300)
+    assert m.warnings == [
+        "warning: an array of heights: 20 cells hold -9999, a usual no-data value, but band 1 "
+        "has none: read as heights; if they are voids, give the band its no-data value "
+        "(gdal_translate -a_nodata -9999 IN OUT)"]
+    assert m.vertices[:, 2].min() < -9000  # the pit is kept
+    tagged = dpts.simplify(z, geotransform=gt, crs="EPSG:32611", nodata=-9999, vertices=300)
+    assert tagged.warnings == [] and tagged.vertices[:, 2].min() > 0
+    whole = dpts.simplify(z, geotransform=gt, crs="EPSG:32611", vertices=300, algo="vp")
+    assert whole.warnings == m.warnings
+
+
 def test_write_by_extension(tmp_path):
     m = dpts.simplify(SAMPLE)
     for ext in ("obj", "stl", "gpkg"):
