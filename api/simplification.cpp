@@ -136,8 +136,7 @@ void run_pieces(const io::DemInfo& dem, const SimplifyRequest& r, const core::Pr
   out.input_vertices = stats.input_vertices;
   out.target_vertices = stats.target_vertices;
   out.kept_vertices = stats.kept_vertices;
-  out.absurd_note = io::absurd_heights_note(dem, stats.absurd_cells);
-  out.usual_nodata_note = io::usual_nodata_note(dem, stats.usual_nodata_cells);
+  out.height_warnings = io::height_warnings(dem, stats.absurd_cells, stats.usual_nodata_cells);
 }
 
 }  // namespace
@@ -160,11 +159,8 @@ Simplification simplify(io::DemInfo dem, const std::string& input, const Simplif
       out.dem = std::move(dem);
       // note: the count pass finds them (a whole-DEM read notes them itself): in the report
       // too, where a batch's user reads them.
-      for (const std::string* note : {&out.absurd_note, &out.usual_nodata_note}) {
-        if (note->empty()) continue;
-        out.dem.notes.push_back(*note);
-        out.height_warnings.push_back(*note);
-      }
+      out.dem.notes.insert(out.dem.notes.end(), out.height_warnings.begin(),
+                           out.height_warnings.end());
       break;
   }
   // note: the TIN is built in a local affine frame; a projection far from affine could fold a

@@ -58,9 +58,8 @@ struct Simplification {
   par::MetaStats pieces;
   bool piece_engine = false;
   std::size_t rejected_folds = 0;  // qslim: collapses refused (fold or link condition)
-  std::string absurd_note;         // implausible heights read as no-data, or empty
-  std::string usual_nodata_note;   // usual no-data values not the band's, or empty
-  // The warnings of the heights read, by any method (those above, or a whole-DEM read's).
+  // The warnings of the heights read (io::height_warnings), by any method: a whole-DEM read's,
+  // or the piece engines' count pass's.
   std::vector<std::string> height_warnings;
 };
 

@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -339,9 +338,7 @@ void check_par(ParOptions& o, const std::vector<std::string>& positional, const 
   // note: a name without an extension (or a stream) is PLY without a word; out.tif or out.xyz
   // may be a slip, and a PLY under such a name surprises whoever opens it.
   const std::string ext = std::filesystem::path(o.output).extension().string();
-  std::string lower_ext = ext;
-  for (char& c : lower_ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (!o.format_flag && ext.size() > 1 && !io::parse_mesh_format(lower_ext.substr(1)) &&
+  if (!o.format_flag && ext.size() > 1 && !io::parse_mesh_format(std::string_view(ext).substr(1)) &&
       !io::AtomicOutputFile::streams_to(o.output)) {
     o.format_note = o.output + ": written as PLY (" + ext +
                     " is not .ply, .obj, .stl or .gpkg; --format picks the format)";

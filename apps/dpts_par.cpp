@@ -221,11 +221,13 @@ void print_pieces(const dpts::par::MetaStats& stats, bool values) {
   std::fputc('\n', stderr);
 }
 
-// After the method ran: the absurd-heights and usual no-data notes, --verbose's piece table or qslim's refusals,
+// After the method ran: the piece engines' warnings of the heights (their count pass finds them;
+// a whole-DEM read's are among the input's notes), --verbose's piece table or qslim's refusals,
 // and the kept-count warning.
 void after_simplify(const dpts::cli::ParOptions& o, const dpts::api::Simplification& r) {
-  if (!r.absurd_note.empty()) std::cerr << DPTS_PROG ": " << r.absurd_note << "\n";
-  if (!r.usual_nodata_note.empty()) std::cerr << DPTS_PROG ": " << r.usual_nodata_note << "\n";
+  if (r.piece_engine) {
+    for (const std::string& w : r.height_warnings) std::cerr << DPTS_PROG ": " << w << "\n";
+  }
   if (o.verbose && r.piece_engine) print_pieces(r.pieces, dpts::par::is_meta(o.algo));
   if (o.verbose && o.algo == dpts::par::Algorithm::qslim) {
     std::fprintf(stderr, DPTS_PROG ": %s: %zu collapses refused (fold or link condition)\n",

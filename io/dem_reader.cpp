@@ -743,7 +743,8 @@ core::HeightGrid WindowReader::read(int col0, int row0, int width, int height,
     // note: cells holding a usual no-data value other than the band's (it has none, or another)
     // are heights as the band says, counted for a warning (a pit 9999 m deep where a void lost
     // its tag, or voids of -32768 under a tag of -9999).
-    if (!is_nodata && (z <= -9999.0 || z >= 32767.0) && i >= first && i < last) {
+    const bool counted = i >= first && i < last;
+    if (!is_nodata && counted && (z <= -9999.0 || z >= 32767.0)) {
       for (std::size_t k = 0; k < core::kUsualNoData.size(); ++k) {
         if (z == core::kUsualNoData[k]) ++usual_[k];
       }
@@ -757,8 +758,7 @@ core::HeightGrid WindowReader::read(int col0, int row0, int width, int height,
     z = z * scale + offset;
     if (!(std::fabs(z) <= kMaxAbsHeight)) {
       z = nan;
-      const long row = row0 + static_cast<long>(i / static_cast<std::size_t>(width));
-      absurd_ += row >= count_row0_ && row < count_row1_ ? 1 : 0;
+      absurd_ += counted ? 1 : 0;
     }
   }
   info_.check_unchanged();  // also while it was read
@@ -821,6 +821,14 @@ std::string usual_nodata_note(const DemInfo& dem, const core::UsualNoDataCounts&
          ": read as heights; if they are voids, set them to " + tag;
 }
 
+std::vector<std::string> height_warnings(const DemInfo& dem, std::size_t absurd_cells,
+                                         const core::UsualNoDataCounts& usual) {
+  std::vector<std::string> out;
+  for (std::string note : {absurd_heights_note(dem, absurd_cells), usual_nodata_note(dem, usual)})
+    if (!note.empty()) out.push_back(std::move(note));
+  return out;
+}
+
 std::string all_nodata_message(const DemInfo& dem, std::size_t absurd_cells) {
   char nodata[48] = "";
   if (dem.has_nodata) std::snprintf(nodata, sizeof nodata, " (no-data value %.17g)", dem.nodata);
@@ -881,10 +889,7 @@ Dem read_dem(DemInfo info, const core::Progress& progress) {
   WindowReader reader(dem);
   dem.grid = reader.read(0, 0, dem.width, dem.height, progress);
   for (double z : dem.grid.z) dem.valid_cells += std::isnan(z) ? 0 : 1;
-  if (reader.absurd_cells() > 0)
-    dem.height_warnings.push_back(absurd_heights_note(dem, reader.absurd_cells()));
-  const std::string usual = usual_nodata_note(dem, reader.usual_nodata_cells());
-  if (!usual.empty()) dem.height_warnings.push_back(usual);
+  dem.height_warnings = height_warnings(dem, reader.absurd_cells(), reader.usual_nodata_cells());
   dem.notes.insert(dem.notes.end(), dem.height_warnings.begin(), dem.height_warnings.end());
   if (dem.valid_cells == 0) throw InputError(all_nodata_message(dem, reader.absurd_cells()));
   return dem;

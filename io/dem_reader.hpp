@@ -234,6 +234,10 @@ std::string absurd_heights_note(const DemInfo& dem, std::size_t count);
 // their tag.
 std::string usual_nodata_note(const DemInfo& dem, const core::UsualNoDataCounts& counts);
 
+// Those two warnings, the empty ones left out.
+std::vector<std::string> height_warnings(const DemInfo& dem, std::size_t absurd_cells,
+                                         const core::UsualNoDataCounts& usual);
+
 // The message for a DEM whose band has no valid cell, naming the file and the band, and how
 // many cells held heights beyond +-1e7 (read as no-data), if any.
 std::string all_nodata_message(const DemInfo& dem, std::size_t absurd_cells);

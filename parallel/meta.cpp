@@ -64,17 +64,14 @@ core::BlockCounts count_blocks(const core::RasterSource& dem, std::size_t strip_
       strip, (dem.height() + static_cast<int>(4 * threads) - 1) / static_cast<int>(4 * threads));
   strip = std::max(unit, strip / unit * unit);
   const int strips = (dem.height() + strip - 1) / strip;
-  std::vector<std::size_t> valid_of(static_cast<std::size_t>(strips), 0),
-      absurd_of(static_cast<std::size_t>(strips), 0);
-  std::vector<core::UsualNoDataCounts> usual_of(static_cast<std::size_t>(strips));
+  std::vector<std::size_t> valid_of(static_cast<std::size_t>(strips), 0);
+  std::vector<core::RasterSource::Implausible> implausible_of(static_cast<std::size_t>(strips));
   // Counts rows [r0, r1) of strip k from the rows [a, b) that hold them.
   auto count_strip = [&](std::size_t k, int a, int b, int r0, int r1) {
-    core::RasterSource::Implausible implausible;
+    core::RasterSource::Implausible& implausible = implausible_of[k];
     implausible.row0 = r0;
     implausible.row1 = r1;
     const core::HeightGrid g = dem.read(0, a, dem.width(), b - a, &implausible);
-    absurd_of[k] = implausible.cells;
-    usual_of[k] = implausible.usual;
     std::size_t valid = 0;
     const auto own_end = g.z.begin() + static_cast<std::ptrdiff_t>(g.index(0, r1 - a));
     for (auto z = g.z.begin() + static_cast<std::ptrdiff_t>(g.index(0, r0 - a)); z != own_end;
@@ -138,8 +135,8 @@ core::BlockCounts count_blocks(const core::RasterSource& dem, std::size_t strip_
   std::size_t absurd = 0;
   for (std::size_t k = 0; k < valid_of.size(); ++k) {
     *valid_cells += valid_of[k];
-    absurd += absurd_of[k];
-    for (std::size_t v = 0; v < usual->size(); ++v) (*usual)[v] += usual_of[k][v];
+    absurd += implausible_of[k].cells;
+    for (std::size_t v = 0; v < usual->size(); ++v) (*usual)[v] += implausible_of[k].usual[v];
   }
   *absurd_cells = absurd;
   return bc;
