@@ -29,7 +29,14 @@ struct Quadric {
   static Quadric plane(const double n[3], double d);
   Quadric& operator+=(const Quadric& q);
   Quadric& operator*=(double w);
-  double operator()(const double x[3]) const;
+  // The form at x. note: inline, called from every plan of qem's collapse (about 13M on San
+  // Gabriel to 10 %).
+  double operator()(const double x[3]) const {
+    const double ax = a00 * x[0] + a01 * x[1] + a02 * x[2];
+    const double ay = a01 * x[0] + a11 * x[1] + a12 * x[2];
+    const double az = a02 * x[0] + a12 * x[1] + a22 * x[2];
+    return x[0] * ax + x[1] * ay + x[2] * az + 2 * (b0 * x[0] + b1 * x[1] + b2 * x[2]) + c;
+  }
 };
 
 struct QemOptions {
@@ -105,9 +112,9 @@ struct QemResult {
 
 // Simplifies a height-field mesh (faces counter-clockwise seen from above; an edge has at most
 // two faces) by quadric edge collapse until at most `keep` vertices are left or no collapse
-// is allowed (none costing more than max_cost). Throws std::invalid_argument on a non-manifold edge, Cancelled when progress
-// returns false.
-// The mesh and options are taken by value: move them in to save their memory while it runs.
+// is allowed (none costing more than max_cost). Throws std::invalid_argument on a non-manifold
+// edge, Cancelled when progress returns false. The mesh and options are taken by value: move them
+// in to save their memory while it runs.
 QemResult qem_simplify(TriMesh mesh, std::size_t keep, QemOptions options = {},
                        const Progress& progress = nullptr,
                        double max_cost = std::numeric_limits<double>::infinity());
