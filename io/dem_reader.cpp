@@ -806,18 +806,18 @@ std::string usual_nodata_note(const DemInfo& dem, const core::UsualNoDataCounts&
   const std::string others =
       total > counts[most] ? " (" + std::to_string(total - counts[most]) + " more hold another)"
                            : "";
-  const std::string band = "band " + std::to_string(dem.band);
+  const std::string head = "warning: " + dem.path + ": " + std::to_string(counts[most]) +
+                           " cells hold " + value + others + ", a usual no-data value, but band " +
+                           std::to_string(dem.band);
   if (!dem.has_nodata) {
-    return "warning: " + dem.path + ": " + std::to_string(counts[most]) + " cells hold " + value +
-           others + ", a usual no-data value, but " + band +
+    return head +
            " has none: read as heights; if they are voids, give the band its no-data value "
            "(gdal_translate -a_nodata " +
            value + " IN OUT)";
   }
   char tag[32];
   std::snprintf(tag, sizeof tag, "%.17g", dem.nodata);
-  return "warning: " + dem.path + ": " + std::to_string(counts[most]) + " cells hold " + value +
-         others + ", a usual no-data value, but " + band + "'s no-data value is " + tag +
+  return head + "'s no-data value is " + tag +
          ": read as heights; if they are voids, set them to " + tag;
 }
 
