@@ -36,7 +36,7 @@ class IndexedMinHeap {
   bool empty() const { return heap_.empty(); }
   std::size_t size() const { return heap_.size() + banded_; }
   bool contains(std::uint32_t id) const { return pos_[id] != kAbsent; }
-  std::uint32_t top() const { return at(0).id; }
+  std::uint32_t top() const { return at(0).id(); }
   double top_key() const { return decode(at(0).key); }
 
   // Builds the heap from (id, key) pairs at once, in O(n) (ids absent).
@@ -94,7 +94,7 @@ class IndexedMinHeap {
       }
       from_band(id);
     }
-    queue(Entry{id, scramble(id), k});
+    queue(make(id, k));
   }
 
   void erase(std::uint32_t id) {
@@ -128,7 +128,7 @@ class IndexedMinHeap {
     }
   }
   std::uint32_t pop() {
-    const std::uint32_t id = at(0).id;
+    const std::uint32_t id = at(0).id();
     pos_[id] = kAbsent;
     const Entry last = heap_.back();
     heap_.pop_back();
@@ -146,10 +146,14 @@ class IndexedMinHeap {
   // flipped, negatives all flipped; -0 as +0, NaN above +infinity), and the entry laid out so
   // that one unsigned 128-bit comparison orders by (key, tie): sifting chooses among children
   // without branches (the double and tie tests were a third of qem's collapse loop).
+  // note: two 64-bit words, the 128-bit value made from them in registers: an entry built
+  // field by field (id, tie, key: three stores) and read back as one 16-byte value could not
+  // be forwarded from the store buffer, and each such read waited for every older store to
+  // reach the cache, cache misses included (perf: half of `set`'s samples, on that read).
   struct Entry {
-    std::uint32_t id;   // bits 0-31 of the 128-bit value (ties are unique: never decides)
-    std::uint32_t tie;  // bits 32-63
-    std::uint64_t key;  // bits 64-127
+    std::uint64_t lo;   // tie << 32 | id (ties are unique: the id never decides)
+    std::uint64_t key;
+    std::uint32_t id() const { return static_cast<std::uint32_t>(lo); }
   };
   static std::uint64_t encode(double key) {
     if (std::isnan(key)) return ~std::uint64_t{0};
@@ -165,15 +169,18 @@ class IndexedMinHeap {
     std::memcpy(&k, &u, sizeof k);
     return k;
   }
-  static Entry entry(std::uint32_t id, double key) { return {id, scramble(id), encode(key)}; }
-  static U128 value(const Entry& e) {
-    static_assert(sizeof(Entry) == 16 && offsetof(Entry, tie) == 4 && offsetof(Entry, key) == 8 &&
-                  __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__);
-    U128 v;
-    std::memcpy(&v, &e, sizeof v);  // little-endian: key, then tie, then id
-    return v;
+  static Entry make(std::uint32_t id, std::uint64_t key) {
+    return {std::uint64_t{scramble(id)} << 32 | id, key};
   }
+  static Entry entry(std::uint32_t id, double key) { return make(id, encode(key)); }
+  static U128 value(const Entry& e) { return U128{e.key} << 64 | e.lo; }
   static bool less(const Entry& a, const Entry& b) { return value(a) < value(b); }
+  // e appended to v word by word, never through a copy in memory (see Entry).
+  static void append(std::vector<Entry>& v, const Entry e) {
+    v.emplace_back();
+    v.back().lo = e.lo;
+    v.back().key = e.key;
+  }
   // note: 4-ary: half the levels of a binary heap, and a node's children share a cache line
   // or two. Pops come in the same order (keys and ties are totally ordered).
   // note: not aligned to cache lines (children in one line): 0.6 % fewer cycles in qem, but
@@ -191,7 +198,7 @@ class IndexedMinHeap {
     return static_cast<std::uint32_t>(key >> kBandShift);
   }
   // Entry e (its id not queued, or just taken out) set aside in its band.
-  void to_band(const Entry& e) {
+  void to_band(const Entry e) {
     const std::uint32_t b = band(e.key);
     // note: room for the bands from the lowest to the highest used (a few hundred), not all.
     if (bands_.empty()) {
@@ -205,9 +212,9 @@ class IndexedMinHeap {
     }
     auto& v = band_vec(b);
     if (v.empty()) nonempty_[b >> 6] |= std::uint64_t{1} << (b & 63);
-    pos_[e.id] = kInBand + static_cast<std::uint32_t>(v.size());
-    band_of_[e.id] = static_cast<std::uint16_t>(b);
-    v.push_back(e);
+    pos_[e.id()] = kInBand + static_cast<std::uint32_t>(v.size());
+    band_of_[e.id()] = static_cast<std::uint16_t>(b);
+    append(v, e);
     ++banded_;
   }
   // Id's entry taken out of its band (its pos_ left for the caller to set).
@@ -217,7 +224,7 @@ class IndexedMinHeap {
     const std::uint32_t i = pos_[id] - kInBand;
     if (i + 1 != v.size()) {
       v[i] = v.back();
-      pos_[v[i].id] = kInBand + i;
+      pos_[v[i].id()] = kInBand + i;
     }
     v.pop_back();
     if (v.empty()) nonempty_[b >> 6] &= ~(std::uint64_t{1} << (b & 63));
@@ -237,7 +244,7 @@ class IndexedMinHeap {
     auto& v = band_vec(b);
     heap_.reserve(heap_.size() + v.size());
     for (const Entry& e : v) {
-      pos_[e.id] = static_cast<std::uint32_t>(heap_.size());
+      pos_[e.id()] = static_cast<std::uint32_t>(heap_.size());
       heap_.push_back(e);
     }
     banded_ -= v.size();
@@ -258,9 +265,9 @@ class IndexedMinHeap {
   }
   // Entry e (its id not queued) into the heap below the bound, else into its band; the heap
   // refilled if that left it empty.
-  void queue(const Entry& e) {
+  void queue(const Entry e) {
     if (band(e.key) < bound_band_) {
-      heap_.push_back(e);
+      append(heap_, e);
       sift_up(heap_.size() - 1, e);
     } else {
       to_band(e);
@@ -279,9 +286,10 @@ class IndexedMinHeap {
     }
   }
   const Entry& at(std::size_t i) const { return heap_[i]; }
-  void place(std::size_t i, const Entry& e) {
-    heap_[i] = e;
-    pos_[e.id] = static_cast<std::uint32_t>(i);
+  void place(std::size_t i, const Entry e) {
+    heap_[i].lo = e.lo;
+    heap_[i].key = e.key;
+    pos_[e.id()] = static_cast<std::uint32_t>(i);
   }
   // The smallest of the children [first, end) (end > first).
   std::size_t min_child(std::size_t first, std::size_t end) const {
