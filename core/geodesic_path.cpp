@@ -228,14 +228,22 @@ bool PathStraightener::unfold(const SurfacePoint& source, const SurfacePoint& ta
     const Point2 r2{u2.x + along * dx - s * off * dy, u2.y + along * dy + s * off * dx};
     // Seen from b, the portal's left end is counter-clockwise from its right end.
     const double turn = (w2.x - b2.x) * (u2.y - b2.y) - (w2.y - b2.y) * (u2.x - b2.x);
+    // note: the records appended field by field from registers. Built on the stack and copied
+    // in 16-byte pieces, each piece read back stores of 4 and 8 bytes, which the store buffer
+    // cannot forward: the copy waited for them to reach the cache (perf: half of unfold's
+    // samples on those copies).
+    const std::uint32_t a = ids[iu], c = ids[iw];
+    Portal& portal = portals_.emplace_back();
     if (turn > 0) {
-      portals_.push_back({ids[iu], ids[iw], u2, w2});
+      portal.left = a, portal.right = c, portal.l = u2, portal.r = w2;
     } else {
-      portals_.push_back({ids[iw], ids[iu], w2, u2});
+      portal.left = c, portal.right = a, portal.l = w2, portal.r = u2;
     }
-    ids = {ids[iu], ids[iw], r};
-    p2 = {u2, w2, r2};
-    unfolded_.push_back({ids, p2});
+    ids[0] = a, ids[1] = c, ids[2] = r;
+    p2[0] = u2, p2[1] = w2, p2[2] = r2;
+    Unfolded& face = unfolded_.emplace_back();
+    face.ids[0] = a, face.ids[1] = c, face.ids[2] = r;
+    face.p2[0] = u2, face.p2[1] = w2, face.p2[2] = r2;
   }
   const Point2 t2 = lift2(target);
   portals_.push_back({kNoVertex, kNoVertex, t2, t2});
