@@ -296,7 +296,7 @@ struct Eliminator::Impl {
     };
     bound(pr);
     const std::size_t n = s.ring.size();
-    for (std::size_t j = (first + s.poly.size()) % n; j != first; j = next_index(j, n)) {
+    for (std::size_t j = (first + s.poly.size()) % n; j != first; j = link_next(j, n)) {
       const std::uint32_t q = s.ring[j];
       if (q == s.poly.front() || q == s.poly.back() || q == kInfinite) continue;
       bound(point(q));
@@ -316,10 +316,6 @@ struct Eliminator::Impl {
     return col - col_r >= box.col_lo + margin && col + col_r <= box.col_hi - margin &&
            row - row_r >= box.row_lo + margin && row + row_r <= box.row_hi - margin;
   }
-
-  // j + 1 round a ring of n. note: not (j + 1) % n, a 64-bit division (perf: the polygon's
-  // copy from its least id, one division an element, a quarter of evaluate's samples).
-  static std::size_t next_index(std::size_t j, std::size_t n) { return j + 1 == n ? 0 : j + 1; }
 
   // The link of v, counter-clockwise, into s.ring, and in s.inside whether each face
   // v -> ring[j] -> ring[j+1] is in the footprint.
@@ -355,7 +351,7 @@ struct Eliminator::Impl {
     const std::size_t n = s.ring.size();
     std::size_t runs = 0;
     for (std::size_t j = 0; j < n; ++j) {
-      if (s.inside[j] && !s.inside[j == 0 ? n - 1 : j - 1]) ++runs, first = j;
+      if (s.inside[j] && !s.inside[link_prev(j, n)]) ++runs, first = j;
     }
     return runs;
   }
@@ -363,7 +359,7 @@ struct Eliminator::Impl {
   // The end of the inside run starting at `first`: the ring index after its last face.
   static std::size_t run_end(const Scratch& s, std::size_t first) {
     std::size_t j = first;
-    while (s.inside[j]) j = next_index(j, s.ring.size());
+    while (s.inside[j]) j = link_next(j, s.ring.size());
     return j;
   }
 
@@ -388,7 +384,7 @@ struct Eliminator::Impl {
     std::size_t least = 0;
     for (std::size_t j = 1; j < n; ++j) least = s.ring[j] < s.ring[least] ? j : least;
     s.poly.resize(n);
-    for (std::size_t j = 0, i = least; j < n; ++j, i = next_index(i, n)) s.poly[j] = s.ring[i];
+    for (std::size_t j = 0, i = least; j < n; ++j, i = link_next(i, n)) s.poly[j] = s.ring[i];
   }
 
   // The polygon of an outline vertex's inside run of faces (after read_ring; the run from
@@ -396,7 +392,7 @@ struct Eliminator::Impl {
   static void inside_polygon(Scratch& s, std::size_t first) {
     const std::size_t n = s.ring.size(), end = run_end(s, first);
     s.poly.clear();
-    for (std::size_t j = first; j != end; j = next_index(j, n)) s.poly.push_back(s.ring[j]);
+    for (std::size_t j = first; j != end; j = link_next(j, n)) s.poly.push_back(s.ring[j]);
     s.poly.push_back(s.ring[end]);
   }
 
@@ -407,7 +403,7 @@ struct Eliminator::Impl {
   bool outer_refill(Scratch& s, std::size_t first) const {
     const std::size_t n = s.ring.size(), end = run_end(s, first);
     s.outer.clear();
-    for (std::size_t j = end; j != first; j = next_index(j, n)) s.outer.push_back(s.ring[j]);
+    for (std::size_t j = end; j != first; j = link_next(j, n)) s.outer.push_back(s.ring[j]);
     s.outer.push_back(s.ring[first]);
     s.outer_tris.clear();
     if (std::find(s.outer.begin(), s.outer.end(), kInfinite) != s.outer.end()) {
@@ -457,7 +453,7 @@ struct Eliminator::Impl {
       const Point& pa = point(s.poly.front());
       const Point& pb = point(s.poly.back());
       const Point& pr = point(s.poly[s.tris.front()[2]]);
-      for (std::size_t j = (first + s.poly.size()) % n; j != first; j = next_index(j, n)) {
+      for (std::size_t j = (first + s.poly.size()) % n; j != first; j = link_next(j, n)) {
         const std::uint32_t q = s.ring[j];
         if (q == s.poly.front() || q == s.poly.back() || q == kInfinite) continue;
         if (in_circle(pb, pa, pr, point(q))) return kLocked;

@@ -15,10 +15,6 @@ struct P2 {
 };
 
 double cross(P2 o, P2 a, P2 b) { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x); }
-// The index after and before i round a link of n (i < n). note: not % n, a 64-bit division
-// (perf: the fans' loops of the volume and its bound waited on one per wedge).
-std::size_t next_of(std::size_t i, std::size_t n) { return i + 1 == n ? 0 : i + 1; }
-std::size_t prev_of(std::size_t i, std::size_t n) { return i == 0 ? n - 1 : i - 1; }
 
 // Plane z = a x + b y + c through three points (degenerate triangles give a flat plane at
 // their mean height; they have no area and contribute nothing anyway).
@@ -147,7 +143,7 @@ double vp_volume_exact(const Star& s, const std::vector<LinkTriangle>& after) {
     for (std::size_t w = 0; w < count; ++w) {
       const std::size_t i = first + w < s.n ? first + w : first + w - s.n;  // both below n
       const Point3& a = s.link[i];
-      const Point3& b = s.link[next_of(i, s.n)];
+      const Point3& b = s.link[link_next(i, s.n)];
       const P2 pa{a.x, a.y}, pb{b.x, b.y};
       poly.n = 3;
       poly.v[0] = {p.x, p.y}, poly.v[1] = {q.x, q.y}, poly.v[2] = {r.x, r.y};
@@ -186,7 +182,7 @@ double vp_volume_bound(const Star& s, const std::vector<LinkTriangle>& after) {
   double before = 0.0, relief = 0.0;
   for (std::size_t i = 0; i < fan_count(s); ++i) {
     const Point3& a = s.link[i];
-    const Point3& b = s.link[next_of(i, s.n)];
+    const Point3& b = s.link[link_next(i, s.n)];
     before += triangle_area(apex, {a.x, a.y}, {b.x, b.y}) * ((a.z - z0) + (b.z - z0));
   }
   double after_sum = 0.0, area = 0.0;
@@ -267,8 +263,8 @@ void fan_geodesics(const Star& s, const std::vector<double>& radius, const std::
   bool past_pi = false;
   std::size_t idx = from;
   for (std::size_t k = 1; k <= max_steps; ++k) {
-    const P2 t = turn[dir > 0 ? idx : prev_of(idx, s.n)];
-    idx = dir > 0 ? next_of(idx, s.n) : prev_of(idx, s.n);
+    const P2 t = turn[dir > 0 ? idx : link_prev(idx, s.n)];
+    idx = dir > 0 ? link_next(idx, s.n) : link_prev(idx, s.n);
     // note: each turn is by an angle in [0, pi], so while the sum is below pi the direction
     // stays in the upper half plane; the sum reaches pi where it leaves it (or lands on -x).
     // The angles are not negative: from then on every path runs through the apex.
@@ -307,7 +303,7 @@ double pld_importance(const Star& s) {
   // The 3D angle at the apex of each fan triangle, as its cosine and sine (not negative).
   for (std::size_t i = 0; i < fan_count(s); ++i) {
     const Point3& a = s.link[i];
-    const Point3& b = s.link[next_of(i, n)];
+    const Point3& b = s.link[link_next(i, n)];
     const double ax = a.x - s.apex.x, ay = a.y - s.apex.y, az = a.z - s.apex.z;
     const double bx = b.x - s.apex.x, by = b.y - s.apex.y, bz = b.z - s.apex.z;
     const double cx = ay * bz - az * by, cy = az * bx - ax * bz, cz = ax * by - ay * bx;

@@ -26,6 +26,11 @@ struct Star {
   bool closed = true;
 };
 
+// The index after and before i round a link (or any ring) of n (i < n). note: not % n, a
+// 64-bit division: the refill's and the importances' loops waited on one an element.
+inline std::size_t link_next(std::size_t i, std::size_t n) { return i + 1 == n ? 0 : i + 1; }
+inline std::size_t link_prev(std::size_t i, std::size_t n) { return i == 0 ? n - 1 : i - 1; }
+
 // A triangle of the star's polygon after the apex is removed, as indices into link,
 // counter-clockwise.
 using LinkTriangle = std::array<int, 3>;
