@@ -18,8 +18,9 @@ double cross(P2 o, P2 a, P2 b) { return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) 
 
 // Plane z = a x + b y + c through three points (degenerate triangles give a flat plane at
 // their mean height; they have no area and contribute nothing anyway).
+// note: no member initializers, so that vp_volume_exact's array of them is not zeroed a call.
 struct Plane {
-  double a = 0, b = 0, c = 0;
+  double a, b, c;
   double at(double x, double y) const { return a * x + b * y + c; }
 };
 
@@ -27,7 +28,7 @@ Plane plane_through(const Point3& p, const Point3& q, const Point3& r) {
   const double ux = q.x - p.x, uy = q.y - p.y, uz = q.z - p.z;
   const double vx = r.x - p.x, vy = r.y - p.y, vz = r.z - p.z;
   const double det = ux * vy - uy * vx;
-  Plane pl;
+  Plane pl{0, 0, 0};
   if (det == 0.0) {
     pl.c = (p.z + q.z + r.z) / 3.0;
     return pl;
@@ -119,11 +120,16 @@ double vp_volume_exact(const Star& s, const std::vector<LinkTriangle>& after) {
   };
   SmallPoly poly, tmp;
   double volume = 0.0;
-  // The fan triangles' planes, each made once (on first use) for the stars of at most kCached
-  // link vertices (nearly all), where each was made again for every new triangle it met.
+  // The fan triangles' planes, each made once, first, for the stars of at most kCached link
+  // vertices (nearly all), where each was made again for every new triangle it met. note:
+  // every wedge meets a new triangle (they tile the same polygon), so none is made in vain;
+  // made on first use, its test's branch missed often (cachegrind).
   constexpr std::size_t kCached = 32;
   Plane before[kCached];
-  bool made[kCached] = {};
+  const std::size_t cached = std::min(wedges, kCached);
+  for (std::size_t i = 0; i < cached; ++i) {
+    before[i] = plane_through(s.apex, s.link[i], s.link[link_next(i, s.n)]);
+  }
   // Each new triangle is cut by the wedges of the fan (apex, link[i], link[i+1]); inside one
   // piece both surfaces are planes, so their difference is linear and integrates exactly.
   for (const LinkTriangle& t : after) {
@@ -153,13 +159,7 @@ double vp_volume_exact(const Star& s, const std::vector<LinkTriangle>& after) {
       if (tmp.n < 3) continue;
       clip_left(tmp, pb, apex, poly);
       if (poly.n < 3) continue;
-      Plane before_plane;
-      if (i >= kCached) {
-        before_plane = plane_through(s.apex, a, b);
-      } else {
-        if (!made[i]) before[i] = plane_through(s.apex, a, b), made[i] = true;
-        before_plane = before[i];
-      }
+      const Plane before_plane = i < cached ? before[i] : plane_through(s.apex, a, b);
       auto diff = [&](P2 v) { return before_plane.at(v.x, v.y) - after_plane.at(v.x, v.y); };
       const double d0 = diff(poly.v[0]);
       double d_prev = diff(poly.v[1]);
