@@ -1,6 +1,9 @@
 // Vertex elimination on hand-made DEMs: counts, footprint, Delaunay validity, determinism.
 #include "core/elimination.hpp"
 
+#include <CGAL/Delaunay_triangulation_2.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -8,6 +11,7 @@
 #include <map>
 
 #include "core/footprint.hpp"
+#include "core/lattice_in_circle.hpp"
 #include "core/mesh_check.hpp"
 #include "core/surface_sampling.hpp"
 #include "parallel/simplify.hpp"
@@ -319,4 +323,53 @@ TEST_CASE("a DEM with every cell valid gets CGAL's TIN straight from its grid",
       }
     }
   }
+}
+
+TEST_CASE("the in-circle test on a frame's lattice is CGAL's perturbed one", "[core][simplify]") {
+  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+  using Point = K::Point_2;
+  const CGAL::Delaunay_triangulation_2<K> predicates;
+  // Square cells (every square cocircular), rectangles, shears, a rotation: points of the
+  // frame's lattice within 4 cells of each other, so that many quadruples lie on one circle.
+  const double frames[5][2][2] = {{{30.0, 0.0}, {0.0, -30.0}},
+                                  {{30.0, 0.0}, {0.0, -10.0}},
+                                  {{20.0, 0.4}, {-0.3, -31.0}},
+                                  {{26.0, 15.0}, {15.0, -26.0}},
+                                  {{1.0, 0.0}, {0.0, -1.3}}};
+  std::uint64_t state = 12345;
+  auto next = [&](int n) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<int>((state >> 33) % static_cast<std::uint64_t>(n));
+  };
+  std::size_t compared = 0, on_circle = 0;
+  for (const auto& j : frames) {
+    const auto frame = core::GridFrame::from_jacobian(j);
+    auto at = [&](int c, int r) { return Point(frame.u(c, r), frame.w(c, r)); };
+    for (int trial = 0; trial < 20000; ++trial) {
+      // Every other trial within one cell, where most quadruples are a square's corners.
+      const int span = trial % 2 ? 3 : 5, half = span / 2;
+      const int c0 = 1000 + next(5), r0 = 700 + next(5);
+      const Point pts[4] = {at(c0, r0), at(c0 + next(span) - half, r0 + next(span) - half),
+                            at(c0 + next(span) - half, r0 + next(span) - half),
+                            at(c0 + next(span) - half, r0 + next(span) - half)};
+      const Point &a = pts[1], &b = pts[2], &c = pts[3], &p = pts[0];
+      if (a == b || b == c || a == c || p == a || p == b || p == c) continue;
+      if (CGAL::orientation(a, b, c) != CGAL::LEFT_TURN) continue;
+      const int lattice =
+          core::lattice_in_circle(a.x(), a.y(), b.x(), b.y(), c.x(), c.y(), p.x(), p.y());
+      const bool inside = predicates.side_of_oriented_circle(a, b, c, p, true) ==
+                          CGAL::ON_POSITIVE_SIDE;
+      REQUIRE(lattice >= 0);
+      CHECK((lattice == 1) == inside);
+      ++compared;
+      if (CGAL::side_of_oriented_circle(a, b, c, p) == CGAL::ON_ORIENTED_BOUNDARY) ++on_circle;
+    }
+  }
+  CHECK(compared > 20000);
+  CHECK(on_circle > 800);  // the perturbation is exercised
+  // Off the lattice, or too far apart for 128 bits: nothing known.
+  CHECK(core::lattice_in_circle(0.1, 0, 1, 0, 0, 1, 0.3, 0.3) == -1);
+  CHECK(core::lattice_in_circle(0, 0, 100, 0, 0, 100, 30, 30) == -1);
+  CHECK(core::lattice_in_circle(0, 0, 10, 0, 0, 10, 3, 3) == 1);
+  CHECK(core::lattice_in_circle(0, 0, 10, 0, 0, 10, 30, 3) == 0);
 }
