@@ -357,8 +357,8 @@ TEST_CASE("the in-circle test on a frame's lattice is CGAL's perturbed one", "[c
       if (CGAL::orientation(a, b, c) != CGAL::LEFT_TURN) continue;
       const int lattice =
           core::lattice_in_circle(a.x(), a.y(), b.x(), b.y(), c.x(), c.y(), p.x(), p.y());
-      const bool inside = predicates.side_of_oriented_circle(a, b, c, p, true) ==
-                          CGAL::ON_POSITIVE_SIDE;
+      const bool inside =
+          predicates.side_of_oriented_circle(a, b, c, p, true) == CGAL::ON_POSITIVE_SIDE;
       REQUIRE(lattice >= 0);
       CHECK((lattice == 1) == inside);
       ++compared;
