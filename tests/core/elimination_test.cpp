@@ -11,8 +11,8 @@
 #include <map>
 
 #include "core/footprint.hpp"
-#include "core/lattice_in_circle.hpp"
 #include "core/mesh_check.hpp"
+#include "core/predicates.hpp"
 #include "core/surface_sampling.hpp"
 #include "parallel/simplify.hpp"
 #include "test_support.hpp"
@@ -372,4 +372,34 @@ TEST_CASE("the in-circle test on a frame's lattice is CGAL's perturbed one", "[c
   CHECK(core::lattice_in_circle(0, 0, 100, 0, 0, 100, 30, 30) == -1);
   CHECK(core::lattice_in_circle(0, 0, 10, 0, 0, 10, 3, 3) == 1);
   CHECK(core::lattice_in_circle(0, 0, 10, 0, 0, 10, 30, 3) == 0);
+}
+
+TEST_CASE("the orientation filter answers only with CGAL's exact sign", "[core][simplify]") {
+  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+  std::uint64_t state = 99;
+  auto uniform = [&] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) * 0x1p-53;
+  };
+  std::size_t answered = 0, doubted = 0;
+  for (int trial = 0; trial < 100000; ++trial) {
+    // Points near one line (within a few ulps of it, or on it), and anywhere.
+    const double ax = 1000 * uniform(), ay = 1000 * uniform();
+    const double dx = uniform() - 0.5, dy = uniform() - 0.5;
+    const double s = 1000 * uniform(), t = 1000 * uniform();
+    const double jitter = trial % 3 == 0 ? 0.0 : trial % 3 == 1 ? 1e-13 * (uniform() - 0.5) : 1;
+    const K::Point_2 a(ax, ay), b(ax + s * dx, ay + s * dy), p(ax + t * dx + jitter, ay + t * dy);
+    const int sign = core::orientation_filtered(a.x(), a.y(), b.x(), b.y(), p.x(), p.y());
+    if (sign == 0) {
+      ++doubted;
+      continue;
+    }
+    ++answered;
+    CHECK(sign == static_cast<int>(CGAL::orientation(a, b, p)));
+  }
+  CHECK(answered > 50000);
+  CHECK(doubted > 100);  // near-collinear triples are left to the exact test
+  CHECK(core::orientation_filtered(0, 0, 1, 0, 2, 0) == 0);
+  CHECK(core::orientation_filtered(0, 0, 1, 0, 0, 1) == 1);
+  CHECK(core::orientation_filtered(0, 0, 0, 1, 1, 0) == -1);
 }
