@@ -652,7 +652,7 @@ struct Eliminator::Impl {
       for (int c = 0; c + 1 < w; ++c) {
         const Point &p00 = point(at(c, r)), &p10 = point(at(c + 1, r));
         const Point &p01 = point(at(c, r + 1)), &p11 = point(at(c + 1, r + 1));
-        const bool ccw = CGAL::orientation(p00, p10, p11) == CGAL::LEFT_TURN;
+        const bool ccw = left_turn(p00, p10, p11);
         const bool inside = ccw ? in_circle(p00, p10, p11, p01) : in_circle(p00, p11, p10, p01);
         main[static_cast<std::size_t>(r) * (w - 1) + c] = inside ? 0 : 1;
       }
@@ -661,7 +661,7 @@ struct Eliminator::Impl {
     // basis makes its Delaunay edges cross squares): each against the far corner of the
     // triangle beyond it. Else false, and nothing is made.
     auto encircles = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t t) {
-      const bool ccw = CGAL::orientation(point(a), point(b), point(c)) == CGAL::LEFT_TURN;
+      const bool ccw = left_turn(point(a), point(b), point(c));
       return ccw ? in_circle(point(a), point(b), point(c), point(t))
                  : in_circle(point(a), point(c), point(b), point(t));
     };

@@ -179,11 +179,8 @@ class Collapser {
     }
     check();
     out_.assign(n, kNone);
-    // note: stored either way (its test's outcome, a branch, missed often).
     for (std::uint32_t h = 0; h < fv_.size(); ++h) {
-      const std::uint32_t v = fv_[h];
-      const bool take = (out_[v] == kNone) | (opp_[h] == kNone);
-      out_[v] = take ? h : out_[v];
+      if (out_[fv_[h]] == kNone || opp_[h] == kNone) out_[fv_[h]] = h;
     }
     // Pinched: more than one outline edge leaves the vertex (two fans meet there).
     flags_.assign(n, 0);
@@ -268,8 +265,8 @@ class Collapser {
           m += first_edge(h) ? 1 : 0;
         }
         for (std::uint32_t i = 0; i < m; ++i) {
-          Plan p;
-          if (plan(firsts[i], p, false)) heap_.push_unordered(firsts[i], p.cost);
+          double cost;
+          if (first_cost(firsts[i], cost)) heap_.push_unordered(firsts[i], cost);
         }
         if ((h1 & 0xFFFF) == 0) check();
       }
@@ -594,7 +591,12 @@ class Collapser {
   // face's edge into v through fn_in(h).
   template <typename F, typename G>
   void around(std::uint32_t v, F&& fn, G&& fn_in) const {
-    const std::uint32_t first = out_[v];
+    around_from(out_[v], fn, fn_in);
+  }
+
+  // around(v, ...) from half-edge `first` out of v: out_[v], or for an interior vertex any.
+  template <typename F, typename G>
+  void around_from(std::uint32_t first, F&& fn, G&& fn_in) const {
     std::uint32_t h = first;
     for (;;) {
       fn(h);
@@ -609,23 +611,12 @@ class Collapser {
     }
   }
 
-  // Neighbours of interior vertex v (into a small buffer), counter-clockwise from dst(start),
-  // start a half-edge out of v.
-  int neighbours_from(std::uint32_t start, std::uint32_t* buf, int cap) const {
+  // Neighbours of a vertex (into a small buffer), counter-clockwise from dst(first): first is
+  // as around_from's.
+  int neighbours(std::uint32_t first, std::uint32_t* buf, int cap) const {
     int k = 0;
-    std::uint32_t h = start;
-    do {
-      if (k < cap) buf[k++] = dst(h);
-      h = opp_[prev_of(h)];
-    } while (h != start);
-    return k;
-  }
-
-  // Neighbours of v (into a small buffer).
-  int neighbours(std::uint32_t v, std::uint32_t* buf, int cap) const {
-    int k = 0;
-    around(
-        v,
+    around_from(
+        first,
         [&](std::uint32_t h) {
           if (k < cap) buf[k++] = dst(h);
         },
@@ -739,8 +730,8 @@ class Collapser {
     // An interior end's ring from the other end (its first neighbour): the edge's own faces
     // are then its first and last, known without a test (see fans_ok).
     const bool ring_a = !border(a), ring_b = g != kNone && !border(b);
-    const int ka = ring_a ? neighbours_from(h, na, kCap) : neighbours(a, na, kCap);
-    const int kb = ring_b ? neighbours_from(g, nb, kCap) : neighbours(b, nb, kCap);
+    const int ka = neighbours(ring_a ? h : out_[a], na, kCap);
+    const int kb = neighbours(ring_b ? g : out_[b], nb, kCap);
     if (ka + kb > kCap) return false;
     // note: the common neighbours found by marking a's (a ring holds no vertex twice), not by
     // testing every pair: the pair loop's exits were 9 % of qem's branch misses (cachegrind).
